@@ -53,7 +53,7 @@ class MotionConfig:
     lift_speed: float = 0.3  # m/s while holding an object
     lift_height: float = 0.09  # TCP height above the table after a grasp
     push_length: float = 0.10
-    push_height: float = 0.006  # fingertips above the table while pushing
+    push_height: float = 0.0015  # fingertips above the table while pushing: below a 2 mm blade
     place_height: float = 0.10  # TCP height above the table when releasing into a bin
     settle_time: float = 0.15  # s of physics after releasing or pushing before measuring
     servo_tolerance: float = 0.02  # rad: joints must reach their target this close

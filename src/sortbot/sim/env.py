@@ -10,6 +10,7 @@ The env also exposes `privileged_state()` (true poses and classes) for scripted 
 from __future__ import annotations
 
 import copy
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,14 +63,14 @@ class SortingEnv:
         self.stats = EpisodeStats()
         self.total_blowups = 0
         self._last_obs: Observation | None = None
-        self.render_seconds = 0.0  # cumulative, for benchmarks
+        # cumulative timings for benchmarks: rendering per observation, physics per step
+        self.render_seconds = 0.0
+        self.observations = 0
         self.physics_seconds = 0.0
 
     # ---------------------------------------------------------------- lifecycle
     def reset(self, seed: int | None = None, scene: SceneSpec | str | None = None) -> Observation:
         """A new episode: a random drop from `seed`, or a scene (SceneSpec, file path or shipped name)."""
-        import time
-
         if scene is None:
             spec = sample_scene(self.config, 0 if seed is None else int(seed))
         elif isinstance(scene, SceneSpec):
@@ -78,15 +79,18 @@ class SortingEnv:
             spec = load_scene(scene)
         self.close()
         self.scene = spec
-        self.world = World(self.config, spec.objects)
-        self.arm = ArmController(self.world, self.config)
-        self.primitives = Primitives(self.arm, self.config)
+        cfg = self.config
+        if spec.source_container is not None and spec.source_container != cfg.workspace.source_container:
+            cfg = copy.deepcopy(cfg)
+            cfg.workspace.source_container = spec.source_container
+        self.world = World(cfg, spec.objects)
+        self.arm = ArmController(self.world, cfg)
+        self.primitives = Primitives(self.arm, cfg)
         self.world.set_arm(self.primitives.home_q)
         self.arm.target = self.primitives.home_q.copy()
         self.arm.move_fingers(0.0, speed=1.0)
         self.camera = RGBDCamera(self.world, self.config.camera)
         self.stats = EpisodeStats()
-        t0 = time.perf_counter()
         try:
             if spec.settle_time > 0:
                 self.world.hold(spec.settle_time)
@@ -94,7 +98,6 @@ class SortingEnv:
             self._end(f"blowup:{err.reason}")
             self.stats.blowups += 1
             self.total_blowups += 1
-        self.physics_seconds += time.perf_counter() - t0
         self._last_obs = self.observe()
         return self._last_obs
 
@@ -111,12 +114,11 @@ class SortingEnv:
 
     # ---------------------------------------------------------------- observing
     def observe(self) -> Observation:
-        import time
-
         t0 = time.perf_counter()
         rgb, depth, instances = self.camera.render()
         labels = self.camera.labels(instances)
         self.render_seconds += time.perf_counter() - t0
+        self.observations += 1
         self._last_instances = instances
         return Observation(
             rgb=rgb, depth=depth, intrinsics=self.camera.intrinsics, camera_pose=self.camera.pose, labels=labels,
@@ -152,12 +154,11 @@ class SortingEnv:
             o.position = tuple(float(v) for v in poses.positions[k])
             o.quaternion = tuple(float(v) for v in poses.quaternions[k])
             objects.append(o)
-        return SceneSpec(objects=objects, settle_time=0.0, name=self.scene.name, description=self.scene.description, seed=self.scene.seed)
+        return SceneSpec(objects=objects, settle_time=0.0, name=self.scene.name, description=self.scene.description,
+                         seed=self.scene.seed, source_container=self.scene.source_container)
 
     # ---------------------------------------------------------------- acting
     def step(self, action: Action) -> tuple[Observation, Outcome]:
-        import time
-
         if self.stats.done:
             raise RuntimeError("episode is over: call reset() first")
         _validate(action, self.config)

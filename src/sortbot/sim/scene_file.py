@@ -28,6 +28,7 @@ class SceneSpec:
     name: str = ""
     description: str = ""
     seed: int | None = None
+    source_container: bool | None = None  # overrides WorkspaceConfig.source_container when set
 
     def to_dict(self) -> dict:
         return {
@@ -35,6 +36,7 @@ class SceneSpec:
             "description": self.description,
             "seed": self.seed,
             "settle_time": self.settle_time,
+            "source_container": self.source_container,
             "objects": [o.to_dict() for o in self.objects],
         }
 
@@ -48,6 +50,7 @@ class SceneSpec:
             name=str(data.get("name", "")),
             description=str(data.get("description", "")),
             seed=data.get("seed"),
+            source_container=data.get("source_container"),
         )
 
 

@@ -75,7 +75,10 @@ def world_xml(cfg: EnvConfig, specs: list[obj.ObjectSpec]) -> str:
 <mujoco model="sortbot">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{ph.timestep}" integrator="implicitfast" cone="{ph.cone}" impratio="{ph.impratio}"
-          noslip_iterations="{ph.noslip_iterations}" iterations="{ph.solver_iterations}"/>
+          noslip_iterations="{ph.noslip_iterations}" iterations="{ph.solver_iterations}">
+    <!-- no silent auto-reset on bad accelerations: the env detects the blow-up and ends the episode -->
+    <flag autoreset="disable"/>
+  </option>
   <visual>
     <!-- no shadows, no multisampling: on software GL they cost ~6x the render time -->
     <quality offsamples="0" shadowsize="0"/>

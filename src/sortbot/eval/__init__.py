@@ -1,0 +1,1 @@
+"""Evaluation: run policies over seeded episodes and count what the paper counts."""
