@@ -13,6 +13,7 @@ import copy
 import time
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from sortbot.config import EnvConfig
@@ -246,9 +247,6 @@ def _reward(out: Outcome, cfg: EnvConfig) -> float:
 
 
 def _quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    out = np.zeros(9)
+    mujoco.mju_quat2Mat(out, np.asarray(q, dtype=float))
+    return out.reshape(3, 3)

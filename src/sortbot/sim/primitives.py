@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import mujoco
 import numpy as np
 
 from sortbot.config import EnvConfig
@@ -111,8 +112,9 @@ class Primitives:
         bx, by, byaw = ws.bins[bin_name]
         poses = self.world.object_poses()
         obj_pos = poses.positions[held_id - 1]
-        w, qx, qy, qz = poses.quaternions[held_id - 1]
-        obj_yaw = float(np.arctan2(2 * (w * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, poses.quaternions[held_id - 1])
+        obj_yaw = float(np.arctan2(rot[3], rot[0]))  # yaw of the object's long (x) axis
         tcp = self.world.tcp_position()
         flange_yaw = _yaw_of_flange(self.world)
         c, s = np.cos(-flange_yaw), np.sin(-flange_yaw)
