@@ -25,3 +25,32 @@ def env():
     e = SortingEnv(EnvConfig())
     yield e
     e.close()
+
+
+# -- a small collected dataset, shared by the collect / datasets / eval tests ----------------------
+COLLECT_SEED = 7
+
+
+def small_env_config() -> EnvConfig:
+    """3 cutlery, a 4-decision budget and a half-size camera (same field of view): fast to collect."""
+    cfg = EnvConfig()
+    cfg.outcome.max_steps = 4
+    cfg.camera.width, cfg.camera.height, cfg.camera.focal_length = 320, 240, 618.62 / 2
+    return cfg
+
+
+def small_request(out, **kw):
+    from sortbot.collect.runner import CollectRequest
+
+    args = dict(out=out, episodes=2, objects=3, seed=COLLECT_SEED, env_config=small_env_config())
+    args.update(kw)
+    return CollectRequest(**args)
+
+
+@pytest.fixture(scope="session")
+def collected(tmp_path_factory):
+    """(out folder, CollectResult) of 2 small oracle episodes, collected once per test session."""
+    from sortbot.collect.runner import collect
+
+    out = tmp_path_factory.mktemp("collect") / "run"
+    return out, collect(small_request(out))

@@ -155,3 +155,19 @@ class EnvConfig:
     objects: ObjectConfig = field(default_factory=ObjectConfig)
     outcome: OutcomeConfig = field(default_factory=OutcomeConfig)
     scene: SceneConfig = field(default_factory=SceneConfig)
+
+
+@dataclass
+class DatasetConfig:
+    """How collected episodes are written (DESIGN section 4): LeRobot v3 dataset + MCAP logs."""
+
+    fps: int = 5  # nominal decision rate stored in the dataset (one frame per decision)
+    max_objects: int = 10  # rows of `observation.labels`; the largest scene has 10 objects
+    # Depth goes into lerobot's 12-bit depth-map video. A linear 0.1-1.5 m range gives 0.34 mm
+    # quanta, finer than the 3 mm knife blade (lerobot's default log range 0.01-10 m gives ~1.4 mm).
+    depth_min: float = 0.1
+    depth_max: float = 1.5
+    depth_use_log: bool = False
+    rgb_crf: int = 23  # libsvtav1 quality for the RGB video (lower = better, larger)
+    mcap_image_format: str = "png"  # /camera/rgb CompressedImage format: png (lossless) or jpeg
+    mcap_jpeg_quality: int = 90

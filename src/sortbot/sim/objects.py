@@ -59,6 +59,16 @@ class ObjectSpec:
             return np.array([-p["length"] / 2 + p["handle_length"] / 2, 0.0, 0.0])
         return np.zeros(3)
 
+    def extent(self) -> tuple[float, float, float]:
+        """Local bounding-box size (x, y, z); the body origin sits at the bottom centre."""
+        p = self.params
+        if self.shape in CUTLERY_KINDS:
+            head = max(p["head_thickness"] * 3, 0.006) if self.shape == "spoon" else p["head_thickness"]  # bowl depth
+            height = max(p["handle_thickness"], head)
+            return (p["length"], max(p["handle_width"], p["head_width"]), height)
+        s = p.get("size", p.get("scale", 0.05))
+        return {"bar": (2 * s, s, s / 2)}.get(self.shape, (s, s, s))
+
     def grasp_width(self) -> float:
         """Width across the grasp point, for the oracle's clearance check."""
         p = self.params

@@ -1,4 +1,4 @@
-"""The `sortbot` command: sim snapshot / run / scenes, bench sim, demo."""
+"""`sortbot sim snapshot|run|scenes`, `bench sim` and `demo`."""
 
 from __future__ import annotations
 
@@ -110,61 +110,3 @@ def cmd_demo(args) -> int:
     cmd_run(argparse.Namespace(policy="oracle", episodes=args.episodes, objects=6, object_set="cutlery", seed=args.seed, json=False))
     print("== sim bench")
     return cmd_bench_sim(argparse.Namespace(episodes=1, objects=6, seed=args.seed, json=False))
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="sortbot", description="Push, grasp and sort cutlery with a simulated UR3 and an RGB-D camera.")
-    sub = p.add_subparsers(dest="command", required=True)
-
-    def scene_args(sp):
-        sp.add_argument("--objects", type=int, default=6, help="objects per random scene (3 or 6 cutlery, 10 blocks)")
-        sp.add_argument("--object-set", default="cutlery", choices=["cutlery", "blocks"])
-        sp.add_argument("--seed", type=int, default=0)
-
-    sim = sub.add_parser("sim", help="the simulated world").add_subparsers(dest="sim_command", required=True)
-    sp = sim.add_parser("snapshot", help="RGB, depth and segmentation PNGs (+ labels, scene file) of one scene")
-    scene_args(sp)
-    sp.add_argument("--scene", help="scene file (JSON/YAML) or shipped scene name instead of a random drop")
-    sp.add_argument("--out", required=True)
-    sp.add_argument("--overwrite", action="store_true", help="replace files already in --out")
-    sp.set_defaults(func=cmd_snapshot)
-    sp = sim.add_parser("run", help="run a policy over seeded episodes and print how well it sorted")
-    scene_args(sp)
-    sp.add_argument("--policy", default="oracle", choices=["oracle", "random"])
-    sp.add_argument("--episodes", type=int, default=20)
-    sp.add_argument("--json", action="store_true")
-    sp.set_defaults(func=cmd_run)
-    sp = sim.add_parser("scenes", help="list the shipped hard-case scenes")
-    sp.set_defaults(func=cmd_scenes)
-
-    bench = sub.add_parser("bench", help="benchmarks").add_subparsers(dest="bench_command", required=True)
-    sp = bench.add_parser("sim", help="primitive actions/s with one RGB-D observation each (oracle, 6 cutlery)")
-    sp.add_argument("--episodes", type=int, default=3)
-    sp.add_argument("--objects", type=int, default=6)
-    sp.add_argument("--seed", type=int, default=0)
-    sp.add_argument("--json", action="store_true")
-    sp.set_defaults(func=cmd_bench_sim)
-
-    sp = sub.add_parser("demo", help="seeded oracle episodes, a snapshot and the sim bench on small defaults")
-    sp.add_argument("--out", default="outputs/demo")
-    sp.add_argument("--seed", type=int, default=0)
-    sp.add_argument("--episodes", type=int, default=2)
-    sp.set_defaults(func=cmd_demo)
-    return p
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    for name in ("objects", "episodes"):
-        if getattr(args, name, 1) is not None and getattr(args, name, 1) < 1:
-            print(f"sortbot: error: --{name} must be at least 1", file=sys.stderr)
-            return 2
-    try:
-        return args.func(args)
-    except (ValueError, FileNotFoundError, FileExistsError) as err:
-        print(f"sortbot: error: {err}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

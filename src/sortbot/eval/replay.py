@@ -1,0 +1,158 @@
+"""`sortbot replay FILE.mcap`: understand an episode after the fact: a table of what was tried and
+what came of it, PNG frames with the labels and the action drawn, a contact sheet, an MP4."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from sortbot.datasets.mcap_reader import EpisodeLog, McapReadError, read_episode
+
+ACTION_ARROW_M = 0.05  # length of the drawn push direction / gripper closing axis
+SHEET_COLUMNS = 6
+SHEET_THUMB_WIDTH = 320
+_CLASS_RGB = {"fork": (230, 80, 50), "knife": (50, 150, 230), "spoon": (70, 200, 70), "block": (220, 180, 40)}
+
+
+def step_rows(log: EpisodeLog) -> list[dict]:
+    """One row per decision: the action and its outcome (outcome may be missing in a cut file)."""
+    outcomes = {o["step"]: o for o in log.outcomes}
+    rows = []
+    for a in log.actions:
+        o = outcomes.get(a["step"], {})
+        if not o:
+            result = "(no outcome: file cut here)"
+        elif a["primitive"] == "grasp":
+            result = ("held " + str(o.get("held_object_class")) + f" -> {o.get('placed_bin')} bin"
+                      + (" (right)" if o.get("well_placed") else " (WRONG)")) if o.get("grasp_success") else "missed"
+        else:
+            result = "moved" if o.get("push_moved") else "nothing moved"
+        if o and not o.get("executed", True):
+            result = f"not executed ({o.get('failure_reason')})"
+        rows.append({"step": a["step"], "primitive": a["primitive"], "position": a["position"], "angle": a["angle"],
+                     "place_bin": a.get("place_bin"), "result": result, "reward": o.get("reward"),
+                     "sim_s": o.get("sim_time_s"), "wall_s": o.get("wall_time_s"), "done": o.get("done"),
+                     "end_reason": o.get("end_reason")})
+    return rows
+
+
+def summary(log: EpisodeLog) -> dict:
+    grasps = [o for o in log.outcomes if o["primitive"] == "grasp"]
+    pushes = [o for o in log.outcomes if o["primitive"] == "push"]
+    return {
+        "file": str(log.path), "complete": log.complete, "error": log.error, "seed": log.metadata.get("seed"),
+        "policy": log.metadata.get("policy"), "actions": len(log.actions), "observations": len(log.observations),
+        "grasps": len(grasps), "grasp_success": sum(o["grasp_success"] for o in grasps),
+        "well_placed": sum(o["well_placed"] for o in grasps), "pushes": len(pushes),
+        "push_moved": sum(o["push_moved"] for o in pushes),
+        "sim_time_s": sum(o["sim_time_s"] for o in log.outcomes), "wall_time_s": sum(o.get("wall_time_s", 0.0) for o in log.outcomes),
+        "end_reason": log.outcomes[-1].get("end_reason") if log.outcomes else None,
+        "topics": log.counts, "schemas": log.schemas,
+    }
+
+
+def _project(point, calibration, camera_pose: np.ndarray) -> tuple[float, float] | None:
+    """Base-frame point -> pixel, with the logged calibration and camera pose (camera -> base)."""
+    k = np.array(calibration.K, dtype=float).reshape(3, 3)
+    p = camera_pose[:3, :3].T @ (np.asarray(point, dtype=float) - camera_pose[:3, 3])
+    if p[2] <= 0:
+        return None
+    uv = k @ (p / p[2])
+    return float(uv[0]), float(uv[1])
+
+
+def draw_frame(log: EpisodeLog, index: int, camera_pose: np.ndarray):
+    """The observation `index` with label boxes and the action taken from it drawn on."""
+    from PIL import Image, ImageDraw
+
+    obs = log.observations[index]
+    image = Image.fromarray(obs.rgb())
+    draw = ImageDraw.Draw(image)
+    for lab in (obs.labels or {}).get("objects", []):
+        colour = _CLASS_RGB.get(lab["cls"], (200, 200, 200))
+        draw.rectangle(lab["box"], outline=colour, width=2)
+        draw.text((lab["box"][0] + 2, lab["box"][1] + 1), lab["cls"], fill=colour)
+    action = next((a for a in log.actions if a["step"] == obs.step), None)
+    outcome = next((o for o in log.outcomes if o["step"] == obs.step), None)
+    caption = f"step {obs.step}"
+    if action is not None and log.calibration is not None:
+        x, y, z = action["position"]
+        centre = _project((x, y, z), log.calibration, camera_pose)
+        c, s = np.cos(action["angle"]), np.sin(action["angle"])
+        ends = [_project((x + sign * ACTION_ARROW_M * c, y + sign * ACTION_ARROW_M * s, z), log.calibration, camera_pose)
+                for sign in (-1, 1)] if action["primitive"] == "grasp" else \
+               [centre, _project((x + ACTION_ARROW_M * c, y + ACTION_ARROW_M * s, z), log.calibration, camera_pose)]
+        colour = (255, 0, 255) if action["primitive"] == "grasp" else (255, 255, 0)
+        if centre and all(ends):
+            draw.line([*ends[0], *ends[1]], fill=colour, width=3)
+            draw.ellipse([centre[0] - 5, centre[1] - 5, centre[0] + 5, centre[1] + 5], outline=colour, width=2)
+        caption += f": {action['primitive']}" + (f" -> {action['place_bin']} bin" if action.get("place_bin") else "")
+        if outcome is not None:
+            caption += f" | {step_rows(EpisodeLog(path=log.path, actions=[action], outcomes=[outcome]))[0]['result']}"
+    draw.rectangle([0, 0, image.width, 14], fill=(0, 0, 0))
+    draw.text((3, 1), caption, fill=(255, 255, 255))
+    return image
+
+
+def camera_pose_of(log: EpisodeLog) -> np.ndarray:
+    """Camera -> base transform, as the collector wrote it into the episode metadata."""
+    pose = log.metadata.get("camera_pose")
+    if pose is None:
+        raise McapReadError(f"{log.path} has no camera pose in its metadata")
+    return np.asarray(pose, dtype=float)
+
+
+def write_frames(log: EpisodeLog, out: Path) -> list[Path]:
+    """frame_NNNN.png per observation and contact_sheet.png (all frames, thumbnails)."""
+    from PIL import Image
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    pose = camera_pose_of(log)
+    paths, thumbs = [], []
+    for k in range(len(log.observations)):
+        image = draw_frame(log, k, pose)
+        path = out / f"frame_{k:04d}.png"
+        image.save(path)
+        paths.append(path)
+        scale = SHEET_THUMB_WIDTH / image.width
+        thumbs.append(image.resize((SHEET_THUMB_WIDTH, int(image.height * scale))))
+    if thumbs:
+        cols = min(SHEET_COLUMNS, len(thumbs))
+        rows = (len(thumbs) + cols - 1) // cols
+        tw, th = thumbs[0].size
+        sheet = Image.new("RGB", (cols * tw, rows * th), (20, 20, 20))
+        for k, thumb in enumerate(thumbs):
+            sheet.paste(thumb, ((k % cols) * tw, (k // cols) * th))
+        sheet.save(out / "contact_sheet.png")
+        paths.append(out / "contact_sheet.png")
+    return paths
+
+
+def write_video(log: EpisodeLog, path: Path, fps: float = 2.0) -> Path:
+    """An MP4 of the drawn frames (PyAV, H.264 when the build has it, else MPEG-4 part 2)."""
+    import av
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pose = camera_pose_of(log)
+    codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
+    with av.open(str(path), mode="w") as container:
+        stream = container.add_stream(codec, rate=int(round(fps)))
+        stream.pix_fmt = "yuv420p"
+        for k in range(len(log.observations)):
+            image = draw_frame(log, k, pose)
+            stream.width, stream.height = image.width, image.height
+            for packet in stream.encode(av.VideoFrame.from_image(image)):
+                container.mux(packet)
+        for packet in stream.encode():
+            container.mux(packet)
+    return path
+
+
+def load(path: Path, images: bool) -> EpisodeLog:
+    log = read_episode(path, images=images)
+    if not log.observations and not log.actions:
+        raise McapReadError(f"{path} holds no sortbot messages")
+    return log
