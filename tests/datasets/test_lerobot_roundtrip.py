@@ -48,7 +48,7 @@ def test_dataset_reopens_in_stock_lerobot_and_matches_the_env(collected):
     for i, (obs, action, outcome) in zip(ep0, steps):
         item = ds[i]
         np.testing.assert_allclose(item["action"].numpy(), action.as_array(), atol=1e-6)
-        np.testing.assert_allclose(item[LABELS_KEY].numpy(), encode_labels(obs, 10), atol=1e-5)
+        np.testing.assert_allclose(item[LABELS_KEY].numpy(), encode_labels(obs, 10).reshape(-1), atol=1e-5)
         assert bool(item["outcome.grasp_success"]) == outcome.grasp_success
         assert bool(item["outcome.push_moved"]) == outcome.push_moved
         assert bool(item["outcome.well_placed"]) == outcome.well_placed

@@ -44,10 +44,11 @@ def dataset_features(height: int, width: int, config: DatasetConfig) -> dict[str
         RGB_KEY: {"dtype": "video", "shape": (height, width, 3), "names": image_names},
         DEPTH_KEY: {"dtype": "video", "shape": (height, width, 1), "names": image_names, "info": {"is_depth_map": True}},
         STATE_KEY: {"dtype": "float32", "shape": (len(STATE_NAMES),), "names": STATE_NAMES},
+        # flat (max_objects * 10,): lerobot's aggregation and stats handle 1-D vectors only
         LABELS_KEY: {
             "dtype": "float32",
-            "shape": (config.max_objects, len(LABEL_COLUMNS)),
-            "names": ["object", "column"],
+            "shape": (config.max_objects * len(LABEL_COLUMNS),),
+            "names": [f"object{k}.{col}" for k in range(config.max_objects) for col in LABEL_COLUMNS],
         },
         ACTION_KEY: {"dtype": "float32", "shape": (len(ACTION_NAMES),), "names": ACTION_NAMES},
         "action.place_bin": {"dtype": "int64", "shape": (1,), "names": None},
@@ -74,6 +75,12 @@ def encode_labels(obs: Observation, max_objects: int) -> np.ndarray:
     return out
 
 
+def label_rows(array: np.ndarray) -> np.ndarray:
+    """An `observation.labels` value (flat or not, one frame or many) as (..., objects, 10) rows."""
+    array = np.asarray(array)
+    return array.reshape(*array.shape[:-1], -1, len(LABEL_COLUMNS)) if array.shape[-1] != len(LABEL_COLUMNS) else array
+
+
 def decode_labels(array: np.ndarray) -> list[dict]:
     """The present rows of an `observation.labels` array as dicts (class name, box, position, yaw)."""
     out = []
@@ -95,7 +102,7 @@ def step_frame(obs: Observation, action: Action, outcome: Outcome, config: Datas
         RGB_KEY: obs.rgb,
         DEPTH_KEY: obs.depth[..., None].astype(np.float32),
         STATE_KEY: np.array([*obs.joint_positions, obs.gripper_opening], dtype=np.float32),
-        LABELS_KEY: encode_labels(obs, config.max_objects),
+        LABELS_KEY: encode_labels(obs, config.max_objects).reshape(-1),
         ACTION_KEY: action.as_array(),
         "action.place_bin": np.array([_class_or_none(action.place_bin)], dtype=np.int64),
         "next.reward": np.array([outcome.reward], dtype=np.float32),

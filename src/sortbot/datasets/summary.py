@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sortbot.datasets.features import ACTION_KEY, LABELS_KEY
+from sortbot.datasets.features import ACTION_KEY, LABELS_KEY, label_rows
 from sortbot.datasets.lerobot_store import read_collection, read_episode_records
 from sortbot.types import CLASS_NAMES, Primitive
 
@@ -43,7 +43,7 @@ def dataset_summary(path: Path) -> dict:
         values = table[key].reshape(-1).astype(bool)
         return int(values[mask].sum() if mask is not None else values.sum())
 
-    labels = table[LABELS_KEY]
+    labels = label_rows(table[LABELS_KEY])
     present = labels[..., 0] > 0.5
     frame_classes = Counter(CLASS_NAMES[int(c)] for c in labels[..., 1][present])
     scene_classes = Counter(o["cls"] for ep in episodes for o in ep.get("scene", {}).get("objects", []))

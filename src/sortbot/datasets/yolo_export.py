@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sortbot.datasets.features import LABELS_KEY, RGB_KEY
+from sortbot.datasets.features import LABELS_KEY, RGB_KEY, label_rows
 from sortbot.datasets.lerobot_store import read_collection
 from sortbot.datasets.summary import resolve_root
 from sortbot.types import CLASS_NAMES
@@ -37,7 +37,7 @@ def split_episodes(episodes: list[int], val_fraction: float) -> tuple[list[int],
 def yolo_lines(labels: np.ndarray, width: int, height: int, min_box_side: int) -> list[str]:
     """`cls cx cy w h` (normalised) for each present label row."""
     lines = []
-    for row in np.asarray(labels).reshape(-1, labels.shape[-1]):
+    for row in label_rows(labels):
         if row[0] < 0.5:
             continue
         x1, y1, x2, y2 = (float(v) for v in row[2:6])
