@@ -25,17 +25,17 @@ def cmd_collect(args) -> int:
                          objects=args.objects, seed=args.seed, workers=args.workers, engine=args.engine,
                          ray_address=args.ray_address, resume=args.resume, overwrite=args.overwrite,
                          repo_id=args.repo_id, env_config=env_config)
-    bar = None
+    # delay: a refused --out fails before any bar is drawn
+    bar = tqdm(total=args.episodes, desc=f"collect {args.policy}", unit="ep", file=sys.stderr, delay=2)
 
     def progress(done: int, total: int, info: dict) -> None:
-        nonlocal bar
-        bar = bar or tqdm(total=total, initial=done - 1, desc=f"collect {args.policy}", unit="ep", file=sys.stderr)
         bar.n = done
         bar.set_postfix(frames=info["frames"], last=info["end"])
         bar.refresh()
 
-    result = collect(req, progress=progress)
-    if bar is not None:
+    try:
+        result = collect(req, progress=progress)
+    finally:
         bar.close()
     if result.first_episode >= args.episodes:
         print(f"nothing to do: {req.out} already holds {result.episodes} episodes")
@@ -157,7 +157,8 @@ def cmd_bench_collect(args) -> int:
     if args.soak:
         bar = tqdm(total=args.actions, desc="soak", unit="action", file=sys.stderr, disable=args.json)
         result = soak(actions=args.actions, objects=args.objects, seed=args.seed, policy=args.policy,
-                      workers=args.workers, progress=lambda done, total, info: bar.update(done - bar.n))
+                      workers=args.workers, progress=lambda done, total, info: bar.update(done - bar.n),
+                      on_sample=lambda sample: bar.write(json.dumps(sample), file=sys.stderr))
         bar.close()
     else:
         bar = tqdm(desc="bench collect", unit="ep", file=sys.stderr, disable=args.json)

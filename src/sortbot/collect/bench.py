@@ -47,7 +47,7 @@ def bench_collect(episodes: int = 2, objects: int = 6, seed: int = 0, policy: st
 
 
 def soak(actions: int = 10_000, objects: int = 6, seed: int = 0, policy: str = "oracle", workers: int = 1,
-         out: Path | None = None, sample_every_s: float = 30.0, progress=None) -> dict:
+         out: Path | None = None, sample_every_s: float = 30.0, progress=None, on_sample=None) -> dict:
     """Collect until `actions` frames are written, sampling RSS; memory should stay flat."""
     samples: list[dict] = []
     t0 = time.perf_counter()
@@ -58,6 +58,8 @@ def soak(actions: int = 10_000, objects: int = 6, seed: int = 0, policy: str = "
         if now - last[0] >= sample_every_s:
             samples.append({"t_s": now - t0, "frames": info["frames"], **_rss_mb()})
             last[0] = now
+            if on_sample:
+                on_sample(samples[-1])
         if progress:
             progress(info["frames"], actions, info)
 

@@ -31,11 +31,22 @@ class NotADatasetError(ValueError):
     """The folder holds no sortbot LeRobot dataset."""
 
 
+def _quiet() -> None:
+    """Our own progress bar is enough: silence SVT-AV1's banner and HF datasets' per-episode bars."""
+    import os
+
+    import datasets
+
+    os.environ.setdefault("SVT_LOG", "1")  # errors only
+    datasets.disable_progress_bars()
+
+
 def _encoders(config: DatasetConfig):
     from lerobot.configs.video import DepthEncoderConfig, RGBEncoderConfig
 
     rgb = RGBEncoderConfig(crf=config.rgb_crf)
-    depth = DepthEncoderConfig(depth_min=config.depth_min, depth_max=config.depth_max, use_log=config.depth_use_log)
+    depth = DepthEncoderConfig(depth_min=config.depth_min, depth_max=config.depth_max, use_log=config.depth_use_log,
+                               extra_options={"x265-params": "lossless=1:log-level=error"})  # x265 chats on stderr
     return rgb, depth
 
 
@@ -69,6 +80,7 @@ class EpisodeStore:
         self.config = config
         self.repo_id = repo_id
         self._dataset = None  # the lerobot writer of the episode being committed
+        _quiet()
 
     # -- opening -----------------------------------------------------------------------------
     @classmethod
