@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from sortbot.cli import data_commands as data
+from sortbot.cli import demo
 from sortbot.cli import sim_commands as sim_cmds
 
 
@@ -45,11 +46,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     data.add_parsers(sub, scene_args)
 
-    sp = sub.add_parser("demo", help="seeded oracle episodes, a snapshot and the sim bench on small defaults")
+    sp = sub.add_parser("demo", help="the main job on small defaults: snapshot, collect, info, replay, sim bench")
     sp.add_argument("--out", default="outputs/demo")
     sp.add_argument("--seed", type=int, default=0)
     sp.add_argument("--episodes", type=int, default=2)
-    sp.set_defaults(func=sim_cmds.cmd_demo)
+    sp.set_defaults(func=demo.cmd_demo)
     return p
 
 

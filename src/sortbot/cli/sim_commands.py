@@ -99,14 +99,3 @@ def cmd_bench_sim(args) -> int:
         for k, v in result.items():
             print(f"{k:40s} {v:.3f}" if isinstance(v, float) else f"{k:40s} {v}")
     return 0
-
-
-def cmd_demo(args) -> int:
-    """The most complete road that exists: a seeded oracle episode, its snapshot, the sim bench."""
-    out = Path(args.out)
-    print(f"== snapshot of seed {args.seed} -> {out / 'snapshot'}")
-    cmd_snapshot(argparse.Namespace(seed=args.seed, out=str(out / "snapshot"), scene=None, objects=6, object_set="cutlery", overwrite=True))
-    print(f"== oracle episodes, 6 cutlery, seeds {args.seed}..{args.seed + args.episodes - 1}")
-    cmd_run(argparse.Namespace(policy="oracle", episodes=args.episodes, objects=6, object_set="cutlery", seed=args.seed, json=False))
-    print("== sim bench")
-    return cmd_bench_sim(argparse.Namespace(episodes=1, objects=6, seed=args.seed, json=False))
