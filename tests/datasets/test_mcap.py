@@ -51,3 +51,16 @@ def test_garbage_is_not_an_mcap(tmp_path):
     bad.write_bytes(b"not an mcap at all")
     with pytest.raises(McapReadError, match="not a readable MCAP"):
         read_episode(bad)
+
+
+def test_closed_logs_do_not_pile_up_in_foxglove(tmp_path):
+    """foxglove-sdk keeps every Channel in a module dict; a long collection must not grow it."""
+    from foxglove import channel as fox_channel
+
+    from sortbot.datasets.mcap_writer import McapEpisodeLog
+
+    before = len(fox_channel._channels_by_id)
+    for k in range(5):
+        with McapEpisodeLog(tmp_path / f"{k}.mcap", {"seed": k}):
+            pass
+    assert len(fox_channel._channels_by_id) == before

@@ -113,9 +113,18 @@ class McapEpisodeLog:
         self.close()
 
     def close(self) -> None:
-        if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+        if self._writer is None:
+            return
+        from foxglove import channel as fox_channel
+
+        self._writer.close()
+        self._writer = None
+        for chan in (self._rgb, self._depth, self._calibration, self._tf, self._scene, self._labels, self._action, self._outcome):
+            chan.close()
+            # foxglove-sdk 0.25 keeps every foxglove.Channel in a module-level dict forever: one
+            # episode log per file would leak three channels (and their context) per episode
+            fox_channel._channels_by_id.pop(chan.id(), None)
+        self._context = None
 
     # -- per decision ------------------------------------------------------------------------
     def log_observation(self, obs: Observation, objects: list[dict], t_ns: int) -> None:
