@@ -7,6 +7,7 @@ import sys
 
 from sortbot.cli import data_commands as data
 from sortbot.cli import demo
+from sortbot.cli import model_commands as models
 from sortbot.cli import sim_commands as sim_cmds
 
 
@@ -45,6 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     data.add_bench_parser(bench)
 
     data.add_parsers(sub, scene_args)
+    models.add_parsers(sub)
 
     sp = sub.add_parser("demo", help="the main job on small defaults: snapshot, collect, info, replay, sim bench")
     sp.add_argument("--out", default="outputs/demo")

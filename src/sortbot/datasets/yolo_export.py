@@ -26,8 +26,11 @@ class YoloExportConfig:
 
 
 def split_episodes(episodes: list[int], val_fraction: float) -> tuple[list[int], list[int]]:
-    """Train/val by episode: the last ceil(fraction * n) episodes (at least one) validate."""
+    """Train/val by episode: the last ceil(fraction * n) episodes (at least one) validate;
+    a fraction of 1 puts every episode in val."""
     episodes = sorted(episodes)
+    if val_fraction >= 1.0:  # everything held out: a dataset kept for evaluation only
+        return [], episodes
     if len(episodes) < 2:
         raise ValueError(f"need at least 2 episodes to split by episode, the dataset has {len(episodes)}")
     n_val = min(max(1, math.ceil(val_fraction * len(episodes))), len(episodes) - 1)

@@ -1,0 +1,119 @@
+"""`sortbot train detector` and `sortbot eval detector`: YOLO from collected data, fully offline."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def _yolo_data(data: Path, out: Path, val_fraction: float, overwrite: bool) -> Path:
+    """A data.yaml for `data`: a YOLO set (folder with data.yaml, or the yaml itself) is used as is;
+    a collected dataset is exported first (split by episode) into `out`."""
+    from sortbot.datasets.lerobot_store import is_dataset
+    from sortbot.datasets.summary import resolve_root
+    from sortbot.datasets.yolo_export import YoloExportConfig, export_yolo
+
+    data = Path(data)
+    if data.is_file() and data.suffix in (".yaml", ".yml"):
+        return data
+    if (data / "data.yaml").is_file():
+        return data / "data.yaml"
+    root = resolve_root(data)
+    if not is_dataset(root):
+        raise ValueError(f"{data} is neither a collected dataset nor a YOLO set (no data.yaml): "
+                         "give `sortbot collect`'s --out or `datasets export-yolo`'s --out")
+    print(f"exporting {root} to a YOLO set in {out} (split by episode)", file=sys.stderr)
+    return export_yolo(root, out, YoloExportConfig(val_fraction=val_fraction), overwrite=overwrite)
+
+
+def cmd_train_detector(args) -> int:
+    from sortbot.train.detector import DetectorTrainConfig, train_detector
+
+    out = Path(args.out)
+    if out.exists() and any(out.iterdir()) and not args.overwrite:
+        raise FileExistsError(f"{out} is not empty: choose another --out or pass --overwrite")
+    data_yaml = _yolo_data(Path(args.data), out / "yolo_data", args.val_fraction, overwrite=True)
+    cfg = DetectorTrainConfig()
+    for name in ("model", "epochs", "imgsz", "device", "init", "batch", "seed"):
+        if getattr(args, name) is not None:
+            setattr(cfg, name, getattr(args, name))
+    result = train_detector(data_yaml, out / "model", cfg, overwrite=True)
+    m = result.metrics
+    print(f"best weights -> {result.weights}")
+    print(f"trained {result.epochs_run}/{result.epochs} epochs at imgsz {result.imgsz} on {result.device} in "
+          f"{result.train_seconds / 60:.1f} min; held-out mAP50 {m['map50']:.3f}, mAP50-95 {m['map50_95']:.3f}")
+    return 0
+
+
+class _ultralytics_quiet:
+    """Raise ultralytics' logger to WARNING for the duration (its handler holds the real stdout)."""
+
+    def __enter__(self):
+        import logging
+
+        from sortbot.perception.yolo_offline import import_yolo
+
+        import_yolo()  # offline settings before ultralytics is first imported
+        from ultralytics.utils import LOGGER
+
+        self.logger, self.level = LOGGER, LOGGER.level
+        LOGGER.setLevel(logging.WARNING)
+        return self
+
+    def __exit__(self, *exc):
+        self.logger.setLevel(self.level)
+
+
+def cmd_eval_detector(args) -> int:
+    import tempfile
+
+    from sortbot.eval.detector_eval import evaluate_detector
+
+    with tempfile.TemporaryDirectory(prefix="sortbot-eval-") as tmp:
+        data = Path(args.data)
+        # a collected dataset given here is held out as a whole, unless --val-fraction says otherwise
+        data_yaml = _yolo_data(data, Path(tmp) / "yolo", args.val_fraction if args.val_fraction else 1.0, overwrite=True)
+        if args.json:  # keep stdout pure JSON: ultralytics logs its banner and table to stdout
+            import contextlib
+
+            with contextlib.redirect_stdout(sys.stderr), _ultralytics_quiet():
+                result = evaluate_detector(args.weights, data_yaml, split=args.split, imgsz=args.imgsz, device=args.device)
+        else:
+            result = evaluate_detector(args.weights, data_yaml, split=args.split, imgsz=args.imgsz, device=args.device)
+    if args.json:
+        print(json.dumps(result, indent=1, default=str))
+        return 0
+    print(f"mAP50 {result['map50']:.3f}   mAP50-95 {result['map50_95']:.3f}   precision {result['precision']:.3f}   recall {result['recall']:.3f}")
+    for name, row in result.get("per_class", {}).items():
+        print(f"  {name:6s} precision {row['precision']:.3f}  recall {row['recall']:.3f}  mAP50 {row['map50']:.3f}  "
+              f"mAP50-95 {row['map50_95']:.3f}")
+    return 0
+
+
+def add_parsers(sub) -> None:
+    train = sub.add_parser("train", help="train models from collected datasets").add_subparsers(dest="train_command", required=True)
+    sp = train.add_parser("detector", help="YOLO detector from a collected dataset or a YOLO set, offline")
+    sp.add_argument("--data", required=True, help="collect --out folder, LeRobot root, or YOLO set (data.yaml)")
+    sp.add_argument("--out", required=True)
+    sp.add_argument("--model", help="architecture yaml (from scratch, default yolo11n.yaml) or a local .pt")
+    sp.add_argument("--init", help="local checkpoint to start from (never downloaded)")
+    sp.add_argument("--epochs", type=int)
+    sp.add_argument("--imgsz", type=int)
+    sp.add_argument("--batch", type=int)
+    sp.add_argument("--device", help="cpu, cuda, cuda:N or auto")
+    sp.add_argument("--seed", type=int)
+    sp.add_argument("--val-fraction", type=float, default=0.2, help="episodes held out when exporting a dataset")
+    sp.add_argument("--overwrite", action="store_true")
+    sp.set_defaults(func=cmd_train_detector)
+
+    ev = sub.add_parser("eval", help="evaluate models").add_subparsers(dest="eval_command", required=True)
+    sp = ev.add_parser("detector", help="mAP50, mAP50-95, per-class precision/recall on held-out episodes")
+    sp.add_argument("--weights", required=True)
+    sp.add_argument("--data", required=True, help="a YOLO set (its --split), or a collected dataset (all held out)")
+    sp.add_argument("--split", default="val")
+    sp.add_argument("--val-fraction", type=float, help="with a collected dataset: hold out only its last episodes")
+    sp.add_argument("--imgsz", type=int)
+    sp.add_argument("--device", default="auto")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=cmd_eval_detector)
