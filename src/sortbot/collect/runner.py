@@ -114,7 +114,7 @@ def collect(req: CollectRequest, progress: Callable[[int, int, dict], None] | No
     spec = CollectorSpec(env_config=env_cfg, policy=req.policy, dataset_config=req.dataset_config,
                          mcap_dir=str(req.out / MCAP_DIR), base_seed=req.seed,
                          run_metadata={"policy": req.policy, "object_set": req.object_set, "objects": req.objects,
-                                       "base_seed": req.seed, "versions": versions})
+                                       "base_seed": req.seed, "versions": versions, "env_config": collection["env_config"]})
     indices = range(start, req.episodes)
     if req.engine == "ray":
         records = run_ray(spec, indices, req.workers, req.ray_address)
