@@ -1,0 +1,5 @@
+"""Training workflows: the YOLO detector on exported detection sets (the Q-network comes later)."""
+
+from sortbot.train.detector import DetectorTrainConfig, DetectorTrainResult, train_detector
+
+__all__ = ["DetectorTrainConfig", "DetectorTrainResult", "train_detector"]

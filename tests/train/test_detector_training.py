@@ -1,0 +1,126 @@
+"""One tiny YOLO epoch from scratch, with the network unreachable: train, predict, evaluate."""
+
+import json
+import socket
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+from sortbot.config import EnvConfig
+from sortbot.eval.detector_eval import evaluate_detector
+from sortbot.perception import Detection
+from sortbot.perception.detector import DetectorConfig, YoloDetector
+from sortbot.perception.yolo_offline import setup_offline
+from sortbot.sim.env import SortingEnv
+from sortbot.train import DetectorTrainConfig, train_detector
+from sortbot.types import CLASS_NAMES, class_index
+
+TRAIN_SEEDS, VAL_SEEDS = range(0, 6), range(100, 102)
+TINY = dict(epochs=1, imgsz=64, batch=4, device="cpu", workers=0, cache=False, plots=False)
+
+
+@pytest.fixture(scope="module")
+def yolo_set(tmp_path_factory):
+    """A YOLO detection set written straight from SortingEnv observations (3-object drops); held-out
+    seeds for val. `path` is left out so the yaml's own folder must be used."""
+    setup_offline(tmp_path_factory.getbasetemp() / "ultralytics")
+    root = tmp_path_factory.mktemp("yolo_set")
+    cfg = EnvConfig()
+    cfg.scene.num_objects, cfg.scene.settle_time = 3, 0.5
+    val_counts = Counter()
+    with SortingEnv(cfg) as env:
+        for split, seeds in (("train", TRAIN_SEEDS), ("val", VAL_SEEDS)):
+            (root / "images" / split).mkdir(parents=True)
+            (root / "labels" / split).mkdir(parents=True)
+            for seed in seeds:
+                obs = env.reset(seed=seed)
+                h, w = obs.depth.shape
+                Image.fromarray(obs.rgb).save(root / "images" / split / f"{seed}.png")
+                rows = [f"{class_index(l.cls)} {(l.box[0] + l.box[2]) / 2 / w} {(l.box[1] + l.box[3]) / 2 / h} "
+                        f"{(l.box[2] - l.box[0]) / w} {(l.box[3] - l.box[1]) / h}" for l in obs.labels]
+                (root / "labels" / split / f"{seed}.txt").write_text("\n".join(rows) + "\n")
+                if split == "val":
+                    val_counts.update(l.cls for l in obs.labels)
+            last_obs = obs
+    (root / "data.yaml").write_text(yaml.safe_dump(
+        {"train": "images/train", "val": "images/val", "names": dict(enumerate(CLASS_NAMES))}))
+    return root / "data.yaml", val_counts, last_obs
+
+
+@pytest.fixture
+def no_network(monkeypatch):
+    """Any attempt to reach the internet is recorded and refused."""
+    attempts = []
+
+    def refuse_connect(self, address, *args):
+        if self.family in (socket.AF_INET, socket.AF_INET6):
+            attempts.append(address)
+            raise OSError("network disabled in this test")
+        return real_connect(self, address, *args)
+
+    def refuse_lookup(host, *args, **kwargs):
+        attempts.append(host)
+        raise socket.gaierror("network disabled in this test")
+
+    real_connect = socket.socket.connect
+    monkeypatch.setattr(socket.socket, "connect", refuse_connect)
+    monkeypatch.setattr(socket, "getaddrinfo", refuse_lookup)
+    return attempts
+
+
+def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_network, monkeypatch):
+    data_yaml, val_counts, obs = yolo_set
+    monkeypatch.chdir(tmp_path)  # nothing may land in the working directory
+    out = tmp_path / "detector"
+    result = train_detector(data_yaml, out, DetectorTrainConfig(**TINY))
+
+    assert result.weights == out / "best.pt" and result.weights.is_file()
+    assert result.epochs_run == 1 and result.imgsz == 64 and result.device == "cpu"
+    record = json.loads((out / "metrics.json").read_text())
+    for key in ("map50", "map50_95", "precision", "recall"):
+        assert 0.0 <= record[key] <= 1.0 and record[key] == pytest.approx(result.metrics[key])
+    assert record["train_seconds"] > 0 and record["config"]["imgsz"] == 64
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["detector"]  # no ./runs, no downloaded weights
+
+    detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
+    assert detector.imgsz == 64  # the size it was trained at
+    dets = detector.predict(obs)
+    assert 0 < len(dets) <= 20 and all(isinstance(d, Detection) for d in dets)
+    conf = [d.confidence for d in dets]
+    assert conf == sorted(conf, reverse=True)
+    h, w = obs.depth.shape
+    for d in dets:
+        x1, y1, x2, y2 = d.box
+        assert d.cls in CLASS_NAMES and -1 <= x1 < x2 <= w + 1 and -1 <= y1 < y2 <= h + 1
+
+    figures = evaluate_detector(result.weights, data_yaml, split="val", device="cpu")
+    assert figures["split"] == "val" and figures["imgsz"] == 64 and 0.0 <= figures["map50"] <= 1.0
+    # ultralytics counted exactly the held-out objects we labelled, class by class
+    assert {c: v["instances"] for c, v in figures["per_class"].items()} == dict(val_counts)
+    assert no_network == []
+
+
+def test_refusals_happen_before_any_training(yolo_set, tmp_path):
+    data_yaml, _, _ = yolo_set
+    busy = tmp_path / "busy"
+    busy.mkdir()
+    (busy / "notes.txt").write_text("mine")
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        train_detector(data_yaml, busy, DetectorTrainConfig(**TINY))
+    with pytest.raises(FileNotFoundError, match="never downloaded"):
+        train_detector(data_yaml, tmp_path / "a", DetectorTrainConfig(**{**TINY, "model": "yolo11n.pt"}))
+    with pytest.raises(FileNotFoundError, match="nothing is downloaded"):
+        train_detector(data_yaml, tmp_path / "b", DetectorTrainConfig(**{**TINY, "init": str(tmp_path / "x.pt")}))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump({**yaml.safe_load(data_yaml.read_text()), "names": ["spoon", "fork"]}))
+    with pytest.raises(ValueError, match="CLASS_NAMES"):
+        train_detector(bad, tmp_path / "c", DetectorTrainConfig(**TINY))
+    with pytest.raises(FileNotFoundError, match="export a detection set"):
+        train_detector(tmp_path / "none.yaml", tmp_path / "d", DetectorTrainConfig(**TINY))
+    with pytest.raises(FileNotFoundError, match="nothing is downloaded"):
+        evaluate_detector(tmp_path / "nothing.pt", data_yaml)
+    assert (busy / "notes.txt").read_text() == "mine" and not Path("yolo11n.pt").exists()
