@@ -95,3 +95,16 @@ def test_crash_inside_a_commit_is_rolled_back(collected, tmp_path, monkeypatch):
     assert reopened.committed_episodes == 2
     assert len(_load(root)) == frames_before
     assert len(list((root / "data").rglob("*.parquet"))) == 2  # the half-written episode's data is gone
+
+
+def test_commits_leave_no_hf_cache_behind(tmp_path, monkeypatch):
+    """lerobot's resume() writes an arrow cache of all episode metadata per call; per-episode
+    commits must not pile those up in ~/.cache/huggingface."""
+    import datasets
+    from conftest import small_request
+
+    from sortbot.collect.runner import collect
+
+    monkeypatch.setattr(datasets.config, "HF_DATASETS_CACHE", tmp_path / "hf_cache")
+    collect(small_request(tmp_path / "run", episodes=3))
+    assert not list((tmp_path / "hf_cache").rglob("*.arrow"))

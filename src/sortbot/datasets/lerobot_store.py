@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
@@ -80,6 +81,9 @@ class EpisodeStore:
         self.config = config
         self.repo_id = repo_id
         self._dataset = None  # the lerobot writer of the episode being committed
+        # lerobot's resume() converts all episode metadata to a new HF arrow cache every time:
+        # per-episode commits would grow ~/.cache/huggingface quadratically, so ours go here
+        self._hf_cache = Path(tempfile.mkdtemp(prefix="sortbot-hf-cache-"))
         _quiet()
 
     # -- opening -----------------------------------------------------------------------------
@@ -134,6 +138,7 @@ class EpisodeStore:
         records.append({"episode_index": index, **episode})
         _atomic_write(self.root / EPISODES_FILE, "".join(json.dumps(r, default=str) + "\n" for r in records))
         shutil.rmtree(backup)  # the commit point
+        shutil.rmtree(self._hf_cache, ignore_errors=True)
         return index
 
     def close(self) -> None:
@@ -141,12 +146,20 @@ class EpisodeStore:
         if self._dataset is not None:
             self._dataset.finalize()
             self._dataset = None
+        shutil.rmtree(self._hf_cache, ignore_errors=True)
 
     def _resume(self):
         from lerobot.datasets.lerobot_dataset import LeRobotDataset
 
+        import datasets
+
         rgb, depth = _encoders(self.config)
-        return LeRobotDataset.resume(self.repo_id, root=self.root, rgb_encoder=rgb, depth_encoder=depth)
+        default_cache = datasets.config.HF_DATASETS_CACHE
+        datasets.config.HF_DATASETS_CACHE = self._hf_cache
+        try:
+            return LeRobotDataset.resume(self.repo_id, root=self.root, rgb_encoder=rgb, depth_encoder=depth)
+        finally:
+            datasets.config.HF_DATASETS_CACHE = default_cache
 
     # -- recovery ----------------------------------------------------------------------------
     def recover(self) -> bool:
