@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 import yaml
 from PIL import Image
 
@@ -20,6 +21,10 @@ from sortbot.train import DetectorTrainConfig, train_detector
 from sortbot.types import CLASS_NAMES, class_index
 
 TRAIN_SEEDS, VAL_SEEDS = range(0, 6), range(100, 102)
+def _state(weights):
+    return {k: v.float() for k, v in torch.load(weights, map_location="cpu", weights_only=False)["model"].state_dict().items()}
+
+
 TINY = dict(epochs=1, imgsz=64, batch=4, device="cpu", workers=0, cache=False, plots=False)
 
 
@@ -85,6 +90,11 @@ def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_net
         assert 0.0 <= record[key] <= 1.0 and record[key] == pytest.approx(result.metrics[key])
     assert record["train_seconds"] > 0 and record["config"]["imgsz"] == 64
     assert sorted(p.name for p in tmp_path.iterdir()) == ["detector"]  # no ./runs, no downloaded weights
+
+    again = train_detector(data_yaml, tmp_path / "again", DetectorTrainConfig(**TINY))  # the same seed...
+    first, second = _state(result.weights), _state(again.weights)
+    assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)  # ...same weights
+    assert again.metrics == result.metrics
 
     detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
     assert detector.imgsz == 64  # the size it was trained at

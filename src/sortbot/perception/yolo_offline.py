@@ -78,7 +78,8 @@ def setup_offline(config_dir: str | Path | None = None) -> Path:
         utils.ONLINE = False
         _install_fonts(Path(utils.USER_CONFIG_DIR))
     settings = {k: False for k in _OFF_SETTINGS if k in utils.SETTINGS}
-    settings["runs_dir"] = str(Path(utils.USER_CONFIG_DIR) / "runs")  # never ./runs, even by accident
+    for key in ("runs_dir", "weights_dir"):  # never ./runs or ./weights, even by accident
+        settings[key] = str(Path(utils.USER_CONFIG_DIR) / key.removesuffix("_dir"))
     if any(utils.SETTINGS.get(k) != v for k, v in settings.items()):
         utils.SETTINGS.update(settings)
     _state["dir"] = Path(utils.USER_CONFIG_DIR)

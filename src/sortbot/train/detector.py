@@ -39,7 +39,7 @@ class DetectorTrainConfig:
     patience: int = 20  # epochs without improvement before stopping early
     optimizer: str = "AdamW"
     lr0: float = 0.002
-    nbs: int = 16  # nominal batch: one optimizer step per this many images (ultralytics' 64 is 4x fewer)
+    nbs: int | None = None  # images per optimizer step; None: every batch (ultralytics' 64 is too few steps on a CPU)
     warmup_epochs: float = 1.0
     mosaic: float = 0.0  # the camera never moves: mosaic's zoomed-out tiles teach scales never seen
     close_mosaic: int = 0  # last epochs trained without mosaic
@@ -105,7 +105,7 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     metrics = model.train(
         data=str(data), epochs=cfg.epochs, imgsz=cfg.imgsz, batch=cfg.batch, device=device, workers=cfg.workers,
         seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
-        lr0=cfg.lr0, nbs=cfg.nbs, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic, close_mosaic=cfg.close_mosaic,
+        lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic, close_mosaic=cfg.close_mosaic,
         scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr, flipud=cfg.flipud, rect=cfg.rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots, amp=False,  # AMP's self-check downloads weights
         project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
     seconds = time.perf_counter() - t0
