@@ -114,7 +114,7 @@ def cmd_datasets_export_yolo(args) -> int:
 
 
 def cmd_replay(args) -> int:
-    from sortbot.eval.replay import load, step_rows, summary, write_frames, write_video
+    from sortbot.eval.replay import draw_frames, load, step_rows, summary, write_frames, write_video
 
     log = load(Path(args.file), images=bool(args.frames or args.video))
     info = summary(log)
@@ -137,11 +137,12 @@ def cmd_replay(args) -> int:
         console.print(f"{info['actions']} actions: {info['grasp_success']}/{info['grasps']} grasps held, {info['well_placed']} well placed, "
                       f"{info['push_moved']}/{info['pushes']} pushes moved something; sim {info['sim_time_s']:.1f} s, "
                       f"wall {info['wall_time_s']:.1f} s; end: {info['end_reason']}")
+    images = draw_frames(log) if (args.frames or args.video) else []
     if args.frames:
-        paths = write_frames(log, Path(args.frames))
+        paths = write_frames(images, Path(args.frames))
         print(f"{len(paths) - 1} frames and a contact sheet -> {args.frames}")
     if args.video:
-        print(f"video -> {write_video(log, Path(args.video))}")
+        print(f"video -> {write_video(images, Path(args.video))}")
     if log.error:
         print(f"sortbot: error: {args.file} is damaged: {log.error}; shown: the {len(log.actions)} actions read before it",
               file=sys.stderr)

@@ -7,6 +7,7 @@ the dataset's episode order does not depend on the number of workers or the engi
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import os
 from collections import deque
@@ -107,10 +108,10 @@ def run_ray(spec: CollectorSpec, indices: Iterable[int], workers: int, address: 
             return _collect_in_worker(index)
 
     actors = [CollectorActor.remote(spec) for _ in range(max(workers, 1))]
-    turn = iter(range(1 << 62))
+    turn = itertools.cycle(actors)
     try:
         def submit(index: int):
-            ref = actors[next(turn) % len(actors)].collect.remote(index)
+            ref = next(turn).collect.remote(index)
             return lambda: ray.get(ref)
 
         yield from _in_order(submit, indices, len(actors) * IN_FLIGHT_PER_WORKER)

@@ -41,13 +41,14 @@ def task_string(config: EnvConfig) -> str:
     return f"sort {config.scene.num_objects} {config.scene.object_set} objects into their bins"
 
 
-def _scene_objects(env: SortingEnv) -> list[dict]:
+def _scene_objects(states) -> list[dict]:
     """True object poses for the MCAP /scene topic: box markers centred on each object."""
+    from scipy.spatial.transform import Rotation
+
     objects = []
-    for s in env.privileged_state():
+    for s in states:
         size = s.spec.extent()
-        w, x, y, z = s.quaternion
-        up = np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])  # body z axis
+        up = Rotation.from_quat(s.quaternion, scalar_first=True).apply((0.0, 0.0, 1.0))  # body z axis
         objects.append({"instance_id": s.instance_id, "cls": s.cls, "status": s.status, "size": size,
                         "position": (s.position + up * size[2] / 2).tolist(), "quaternion": list(map(float, s.quaternion))})
     return objects
@@ -81,18 +82,20 @@ class EpisodeCollector:
         t_ns = int(round(scene.get("settle_time", 0.0) * 1e9))
         sorted_ok = 0
         with McapEpisodeLog(path, meta, cfg, overwrite=True) as log:  # an unfinished file from a killed run is redone
-            log.log_observation(obs, _scene_objects(env), t_ns)
+            states = env.privileged_state()  # one query per observation: logged, then shown to the policy
+            log.log_observation(obs, _scene_objects(states), t_ns)
             while not env.stats.done:
                 t0 = time.perf_counter()
-                action = self.policy.act(obs, env.privileged_state())
+                action = self.policy.act(obs, states)
                 log.log_action(obs.step, action, t_ns)
                 next_obs, outcome = env.step(action)
                 frames.append(step_frame(obs, action, outcome, cfg))
                 t_ns += int(round(outcome.sim_time_s * 1e9)) or 1
-                log.log_observation(next_obs, _scene_objects(env), t_ns)
+                states = env.privileged_state()
+                log.log_observation(next_obs, _scene_objects(states), t_ns)
                 log.log_outcome(obs.step, outcome, t_ns, time.perf_counter() - t0)
                 obs = next_obs
-            sorted_ok = sum(s.status == f"bin:{s.cls}" for s in env.privileged_state())
+            sorted_ok = sum(s.status == f"bin:{s.cls}" for s in states)
         record_meta = {"seed": seed, "actions": len(frames), "end_reason": env.stats.end_reason,
                        "objects": len(scene["objects"]), "sorted_correctly": sorted_ok, "mcap": path.name,
                        "scene": scene}

@@ -81,21 +81,6 @@ def label_rows(array: np.ndarray) -> np.ndarray:
     return array.reshape(*array.shape[:-1], -1, len(LABEL_COLUMNS)) if array.shape[-1] != len(LABEL_COLUMNS) else array
 
 
-def decode_labels(array: np.ndarray) -> list[dict]:
-    """The present rows of an `observation.labels` array as dicts (class name, box, position, yaw)."""
-    out = []
-    for row in np.asarray(array, dtype=np.float64).reshape(-1, len(LABEL_COLUMNS)):
-        if row[0] < 0.5:
-            continue
-        out.append({
-            "cls": CLASS_NAMES[int(round(row[1]))],
-            "box": [float(v) for v in row[2:6]],
-            "position": [float(v) for v in row[6:9]],
-            "yaw": float(row[9]),
-        })
-    return out
-
-
 def step_frame(obs: Observation, action: Action, outcome: Outcome, config: DatasetConfig) -> dict:
     """One LeRobot frame (without `task`): what was seen, what was done, what came of it."""
     frame = {

@@ -135,8 +135,7 @@ class EpisodeStore:
         dataset.save_episode()
         dataset.finalize()
         records = read_episode_records(self.root)[:index]
-        records.append({"episode_index": index, **episode})
-        _atomic_write(self.root / EPISODES_FILE, "".join(json.dumps(r, default=str) + "\n" for r in records))
+        _write_episode_records(self.root, [*records, {"episode_index": index, **episode}])
         shutil.rmtree(backup)  # the commit point
         shutil.rmtree(self._hf_cache, ignore_errors=True)
         return index
@@ -174,8 +173,7 @@ class EpisodeStore:
         self._drop_unreferenced_files()
         records = read_episode_records(self.root)
         if len(records) > self.committed_episodes:
-            kept = records[: self.committed_episodes]
-            _atomic_write(self.root / EPISODES_FILE, "".join(json.dumps(r) + "\n" for r in kept))
+            _write_episode_records(self.root, records[: self.committed_episodes])
         return rolled_back
 
     def _drop_unreferenced_files(self) -> None:
@@ -198,6 +196,10 @@ class EpisodeStore:
 
 def _video_keys(info) -> list[str]:
     return [k for k, ft in info.features.items() if ft.get("dtype") == "video"]
+
+
+def _write_episode_records(root: Path, records: list[dict]) -> None:
+    _atomic_write(Path(root) / EPISODES_FILE, "".join(json.dumps(r, default=str) + "\n" for r in records))
 
 
 def _atomic_write(path: Path, text: str) -> None:

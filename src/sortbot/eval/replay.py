@@ -15,23 +15,28 @@ SHEET_THUMB_WIDTH = 320
 _CLASS_RGB = {"fork": (230, 80, 50), "knife": (50, 150, 230), "spoon": (70, 200, 70), "block": (220, 180, 40)}
 
 
+def result_text(action: dict, outcome: dict | None) -> str:
+    """What came of one action, in words (an outcome may be missing in a cut file)."""
+    if not outcome:
+        return "(no outcome: file cut here)"
+    if not outcome.get("executed", True):
+        return f"not executed ({outcome.get('failure_reason')})"
+    if action["primitive"] == "grasp":
+        if not outcome.get("grasp_success"):
+            return "missed"
+        return (f"held {outcome.get('held_object_class')} -> {outcome.get('placed_bin')} bin"
+                + (" (right)" if outcome.get("well_placed") else " (WRONG)"))
+    return "moved" if outcome.get("push_moved") else "nothing moved"
+
+
 def step_rows(log: EpisodeLog) -> list[dict]:
-    """One row per decision: the action and its outcome (outcome may be missing in a cut file)."""
+    """One row per decision: the action and its outcome."""
     outcomes = {o["step"]: o for o in log.outcomes}
     rows = []
     for a in log.actions:
         o = outcomes.get(a["step"], {})
-        if not o:
-            result = "(no outcome: file cut here)"
-        elif a["primitive"] == "grasp":
-            result = ("held " + str(o.get("held_object_class")) + f" -> {o.get('placed_bin')} bin"
-                      + (" (right)" if o.get("well_placed") else " (WRONG)")) if o.get("grasp_success") else "missed"
-        else:
-            result = "moved" if o.get("push_moved") else "nothing moved"
-        if o and not o.get("executed", True):
-            result = f"not executed ({o.get('failure_reason')})"
         rows.append({"step": a["step"], "primitive": a["primitive"], "position": a["position"], "angle": a["angle"],
-                     "place_bin": a.get("place_bin"), "result": result, "reward": o.get("reward"),
+                     "place_bin": a.get("place_bin"), "result": result_text(a, o), "reward": o.get("reward"),
                      "sim_s": o.get("sim_time_s"), "wall_s": o.get("wall_time_s"), "done": o.get("done"),
                      "end_reason": o.get("end_reason")})
     return rows
@@ -62,19 +67,16 @@ def _project(point, calibration, camera_pose: np.ndarray) -> tuple[float, float]
     return float(uv[0]), float(uv[1])
 
 
-def draw_frame(log: EpisodeLog, index: int, camera_pose: np.ndarray):
-    """The observation `index` with label boxes and the action taken from it drawn on."""
+def draw_frame(log: EpisodeLog, obs, action: dict | None, outcome: dict | None, camera_pose: np.ndarray):
+    """One observation with its label boxes and the action taken from it drawn on."""
     from PIL import Image, ImageDraw
 
-    obs = log.observations[index]
     image = Image.fromarray(obs.rgb())
     draw = ImageDraw.Draw(image)
     for lab in (obs.labels or {}).get("objects", []):
         colour = _CLASS_RGB.get(lab["cls"], (200, 200, 200))
         draw.rectangle(lab["box"], outline=colour, width=2)
         draw.text((lab["box"][0] + 2, lab["box"][1] + 1), lab["cls"], fill=colour)
-    action = next((a for a in log.actions if a["step"] == obs.step), None)
-    outcome = next((o for o in log.outcomes if o["step"] == obs.step), None)
     caption = f"step {obs.step}"
     if action is not None and log.calibration is not None:
         x, y, z = action["position"]
@@ -89,7 +91,7 @@ def draw_frame(log: EpisodeLog, index: int, camera_pose: np.ndarray):
             draw.ellipse([centre[0] - 5, centre[1] - 5, centre[0] + 5, centre[1] + 5], outline=colour, width=2)
         caption += f": {action['primitive']}" + (f" -> {action['place_bin']} bin" if action.get("place_bin") else "")
         if outcome is not None:
-            caption += f" | {step_rows(EpisodeLog(path=log.path, actions=[action], outcomes=[outcome]))[0]['result']}"
+            caption += f" | {result_text(action, outcome)}"
     draw.rectangle([0, 0, image.width, 14], fill=(0, 0, 0))
     draw.text((3, 1), caption, fill=(255, 255, 255))
     return image
@@ -103,16 +105,22 @@ def camera_pose_of(log: EpisodeLog) -> np.ndarray:
     return np.asarray(pose, dtype=float)
 
 
-def write_frames(log: EpisodeLog, out: Path) -> list[Path]:
-    """frame_NNNN.png per observation and contact_sheet.png (all frames, thumbnails)."""
+def draw_frames(log: EpisodeLog) -> list:
+    """Every observation drawn (PIL images), once, for PNGs, the contact sheet and the video."""
+    pose = camera_pose_of(log)
+    actions = {a["step"]: a for a in log.actions}
+    outcomes = {o["step"]: o for o in log.outcomes}
+    return [draw_frame(log, obs, actions.get(obs.step), outcomes.get(obs.step), pose) for obs in log.observations]
+
+
+def write_frames(images: list, out: Path) -> list[Path]:
+    """frame_NNNN.png per drawn observation and contact_sheet.png (all frames, thumbnails)."""
     from PIL import Image
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    pose = camera_pose_of(log)
     paths, thumbs = [], []
-    for k in range(len(log.observations)):
-        image = draw_frame(log, k, pose)
+    for k, image in enumerate(images):
         path = out / f"frame_{k:04d}.png"
         image.save(path)
         paths.append(path)
@@ -130,20 +138,19 @@ def write_frames(log: EpisodeLog, out: Path) -> list[Path]:
     return paths
 
 
-def write_video(log: EpisodeLog, path: Path, fps: float = 2.0) -> Path:
+def write_video(images: list, path: Path, fps: float = 2.0) -> Path:
     """An MP4 of the drawn frames (PyAV, H.264 when the build has it, else MPEG-4 part 2)."""
     import av
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    pose = camera_pose_of(log)
     codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
     with av.open(str(path), mode="w") as container:
         stream = container.add_stream(codec, rate=int(round(fps)))
         stream.pix_fmt = "yuv420p"
-        for k in range(len(log.observations)):
-            image = draw_frame(log, k, pose)
-            stream.width, stream.height = image.width, image.height
+        if images:
+            stream.width, stream.height = images[0].width, images[0].height
+        for image in images:
             for packet in stream.encode(av.VideoFrame.from_image(image)):
                 container.mux(packet)
         for packet in stream.encode():
