@@ -3,6 +3,8 @@
 import json
 import socket
 
+import yaml
+
 from sortbot.cli import main
 
 
@@ -18,9 +20,12 @@ def test_train_then_eval_detector_from_a_collected_dataset(collected, tmp_path, 
     weights = model / "model" / "best.pt"
     assert weights.is_file() and (model / "yolo_data" / "data.yaml").is_file()
     assert "held-out mAP50" in capsys.readouterr().out
+    crop = json.loads((model / "model" / "best.crop.json").read_text())["crop"]  # trained on the pick area...
+    assert crop == yaml.safe_load((model / "yolo_data" / "data.yaml").read_text())["crop"]
     assert main(["eval", "detector", "--weights", str(weights), "--data", str(out), "--device", "cpu", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert 0.0 <= result["map50"] <= 1.0 and "per_class" in result
+    assert result["crop"] == crop  # ...and evaluated on the same crop
     # refuses to train over a previous run, and rejects a folder that holds no data
     assert main(["train", "detector", "--data", str(out), "--out", str(model), "--epochs", "1"]) == 2
     assert main(["train", "detector", "--data", str(tmp_path / "empty_dir_missing"), "--out", str(tmp_path / "x")]) == 2

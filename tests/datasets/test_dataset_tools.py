@@ -48,9 +48,9 @@ def test_push_dry_run_and_offline_error(collected, capsys, monkeypatch):
 def test_export_yolo_splits_by_episode(collected, tmp_path):
     out, _ = collected
     yolo = tmp_path / "yolo"
-    assert main(["datasets", "export-yolo", str(out), "--out", str(yolo), "--val-fraction", "0.5"]) == 0
+    assert main(["datasets", "export-yolo", str(out), "--out", str(yolo), "--val-fraction", "0.5", "--no-crop"]) == 0
     data = yaml.safe_load((yolo / "data.yaml").read_text())
-    assert data["names"] == {0: "fork", 1: "knife", 2: "spoon", 3: "block"}
+    assert data["names"] == {0: "fork", 1: "knife", 2: "spoon", 3: "block"} and "crop" not in data
     train = sorted((yolo / "images" / "train").glob("*.jpg"))
     val = sorted((yolo / "images" / "val").glob("*.jpg"))
     assert train and val
@@ -64,3 +64,35 @@ def test_export_yolo_splits_by_episode(collected, tmp_path):
     cls, cx = rows[0][0], rows[0][1]
     x1, x2 = present[0][2], present[0][4]
     assert cls == present[0][1] and np.isclose(cx, (x1 + x2) / 2 / 320, atol=1e-5)
+
+
+def test_export_yolo_crops_to_the_pick_area_and_clips_labels(collected, tmp_path):
+    """The default export: frames cut to the pick area of the dataset's own camera, labels clipped
+    to it and kept when 4 px remain; the crop is recorded for training, the detector and eval."""
+    from PIL import Image
+
+    from sortbot.datasets.yolo_export import YoloExportConfig
+    from sortbot.perception.yolo_data import CropBox, read_crop
+
+    out, _ = collected
+    yolo = tmp_path / "yolo"
+    assert main(["datasets", "export-yolo", str(out), "--out", str(yolo), "--val-fraction", "0.5"]) == 0
+    crop = read_crop(yolo / "data.yaml")
+    assert crop is not None and (crop.image_width, crop.image_height) == (320, 240)
+    assert 0 < crop.width < 320 and 0 < crop.height < 240
+    assert CropBox.from_record(json.loads((yolo / "split.json").read_text())) == crop
+    table = load_table(out / "lerobot")
+    frame0 = sorted((yolo / "images" / "train").glob("*.jpg"))[0]
+    assert frame0.stem.endswith("f0000") and Image.open(frame0).size == (crop.width, crop.height)
+    rows = [list(map(float, line.split())) for line in (yolo / "labels" / "train" / (frame0.stem + ".txt")).read_text().splitlines()]
+    labels = label_rows(table["observation.labels"][0])
+    expected = [(row[1], crop.box_to_crop(row[2:6], YoloExportConfig.min_box_side)) for row in labels if row[0] > 0.5]
+    expected = [(k, b) for k, b in expected if b is not None]
+    assert expected and len(rows) == len(expected)
+    for (k, b), row in zip(expected, rows):
+        x1, y1, x2, y2 = b
+        assert row[0] == k and np.allclose(row[1:], [(x1 + x2) / 2 / crop.width, (y1 + y2) / 2 / crop.height,
+                                                     (x2 - x1) / crop.width, (y2 - y1) / crop.height], atol=1e-5)
+    whole = [row[2:6] for row in labels if row[0] > 0.5 and crop.x0 <= row[2] and row[4] <= crop.x1
+             and crop.y0 <= row[3] and row[5] <= crop.y1]
+    assert whole and all(np.allclose(crop.box_to_full(crop.box_to_crop(b)), b) for b in whole)  # the detector's shift back

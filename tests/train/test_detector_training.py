@@ -5,6 +5,7 @@ import socket
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 import yaml
@@ -133,3 +134,35 @@ def test_refusals_happen_before_any_training(yolo_set, tmp_path):
     with pytest.raises(FileNotFoundError, match="nothing is downloaded"):
         evaluate_detector(tmp_path / "nothing.pt", data_yaml)
     assert (busy / "notes.txt").read_text() == "mine" and not Path("yolo11n.pt").exists()
+
+
+def test_training_on_the_pick_area_crop_carries_it_to_the_detector_and_eval(yolo_set, tmp_path, no_network):
+    from sortbot.datasets.yolo_export import crop_yolo_set
+    from sortbot.perception.yolo_data import camera_from_config, pick_area_crop, read_crop
+
+    data_yaml, _, obs = yolo_set
+    intrinsics, pose = camera_from_config(EnvConfig().camera)  # what the renderer's camera reports, without one
+    assert intrinsics == obs.intrinsics and np.allclose(pose.rotation, obs.camera_pose.rotation)
+    assert np.allclose(pose.position, obs.camera_pose.position)
+    crop = pick_area_crop(intrinsics, pose, EnvConfig().workspace)
+    cropped = crop_yolo_set(data_yaml, tmp_path / "cropped", crop)
+    assert read_crop(cropped) == crop
+    image = next((tmp_path / "cropped" / "images" / "val").iterdir())
+    assert Image.open(image).size == (crop.width, crop.height)
+    val_rows = [line.split() for p in (tmp_path / "cropped" / "labels" / "val").iterdir() for line in p.read_text().splitlines()]
+
+    result = train_detector(cropped, tmp_path / "det", DetectorTrainConfig(**TINY))
+    assert result.crop == crop and json.loads((tmp_path / "det" / "best.crop.json").read_text())["crop"] == crop.as_list()
+    assert json.loads((tmp_path / "det" / "metrics.json").read_text())["crop"] == crop.as_list()
+    detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
+    assert detector.crop == crop
+    dets = detector.predict(obs)
+    assert dets and all(crop.x0 - 1 <= d.box[0] < d.box[2] <= crop.x1 + 1 and crop.y0 - 1 <= d.box[1] < d.box[3] <= crop.y1 + 1
+                        for d in dets)  # full-image pixels, inside the crop it saw
+
+    figures = evaluate_detector(result.weights, cropped, split="val", device="cpu")
+    assert figures["crop"] == crop.as_list()
+    assert sum(v["instances"] for v in figures["per_class"].values()) == len(val_rows)
+    with pytest.raises(ValueError, match="same crop"):  # crop weights on whole frames measure nothing useful
+        evaluate_detector(result.weights, data_yaml, split="val", device="cpu")
+    assert no_network == []

@@ -106,8 +106,10 @@ def cmd_datasets_export_yolo(args) -> int:
         bar.total = total
         bar.update(done - bar.n)
 
-    data_yaml = export_yolo(Path(args.dir), Path(args.out), YoloExportConfig(val_fraction=args.val_fraction),
-                            overwrite=args.overwrite, progress=progress)
+    config = YoloExportConfig(val_fraction=args.val_fraction)
+    if args.no_crop:
+        config.crop = None
+    data_yaml = export_yolo(Path(args.dir), Path(args.out), config, overwrite=args.overwrite, progress=progress)
     bar.close()
     print(data_yaml)
     return 0
@@ -214,6 +216,7 @@ def add_parsers(sub, scene_args) -> None:
     sp.add_argument("dir")
     sp.add_argument("--out", required=True)
     sp.add_argument("--val-fraction", type=float, default=0.2)
+    sp.add_argument("--no-crop", action="store_true", help="whole frames (default: cut to the pick area, labels clipped)")
     sp.add_argument("--overwrite", action="store_true")
     sp.set_defaults(func=cmd_datasets_export_yolo)
 

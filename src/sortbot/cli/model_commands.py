@@ -7,9 +7,10 @@ import sys
 from pathlib import Path
 
 
-def _yolo_data(data: Path, out: Path, val_fraction: float, overwrite: bool) -> Path:
+def _yolo_data(data: Path, out: Path, val_fraction: float, overwrite: bool, crop: bool = True, crop_box=None) -> Path:
     """A data.yaml for `data`: a YOLO set (folder with data.yaml, or the yaml itself) is used as is;
-    a collected dataset is exported first (split by episode) into `out`."""
+    a collected dataset is exported first (split by episode) into `out`, cut to the pick area unless
+    `crop` is False, or to exactly `crop_box` when given."""
     from sortbot.datasets.lerobot_store import is_dataset
     from sortbot.datasets.summary import resolve_root
     from sortbot.datasets.yolo_export import YoloExportConfig, export_yolo
@@ -24,7 +25,10 @@ def _yolo_data(data: Path, out: Path, val_fraction: float, overwrite: bool) -> P
         raise ValueError(f"{data} is neither a collected dataset nor a YOLO set (no data.yaml): "
                          "give `sortbot collect`'s --out or `datasets export-yolo`'s --out")
     print(f"exporting {root} to a YOLO set in {out} (split by episode)", file=sys.stderr)
-    return export_yolo(root, out, YoloExportConfig(val_fraction=val_fraction), overwrite=overwrite)
+    config = YoloExportConfig(val_fraction=val_fraction)
+    if not crop:
+        config.crop = None
+    return export_yolo(root, out, config, overwrite=overwrite, crop_box=crop_box)
 
 
 def cmd_train_detector(args) -> int:
@@ -33,7 +37,7 @@ def cmd_train_detector(args) -> int:
     out = Path(args.out)
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         raise FileExistsError(f"{out} is not empty: choose another --out or pass --overwrite")
-    data_yaml = _yolo_data(Path(args.data), out / "yolo_data", args.val_fraction, overwrite=True)
+    data_yaml = _yolo_data(Path(args.data), out / "yolo_data", args.val_fraction, overwrite=True, crop=not args.no_crop)
     cfg = DetectorTrainConfig()
     for name in ("model", "epochs", "imgsz", "device", "init", "batch", "seed"):
         if getattr(args, name) is not None:
@@ -41,7 +45,8 @@ def cmd_train_detector(args) -> int:
     result = train_detector(data_yaml, out / "model", cfg, overwrite=True)
     m = result.metrics
     print(f"best weights -> {result.weights}")
-    print(f"trained {result.epochs_run}/{result.epochs} epochs at imgsz {result.imgsz} on {result.device} in "
+    seen = f"the crop {result.crop.as_list()}" if result.crop else "whole frames"
+    print(f"trained {result.epochs_run}/{result.epochs} epochs at imgsz {result.imgsz} on {seen}, {result.device}, in "
           f"{result.train_seconds / 60:.1f} min; held-out mAP50 {m['map50']:.3f}, mAP50-95 {m['map50_95']:.3f}")
     return 0
 
@@ -69,11 +74,15 @@ def cmd_eval_detector(args) -> int:
     import tempfile
 
     from sortbot.eval.detector_eval import evaluate_detector
+    from sortbot.perception.detector import require_weights
+    from sortbot.perception.yolo_data import read_crop_sidecar
 
     with tempfile.TemporaryDirectory(prefix="sortbot-eval-") as tmp:
         data = Path(args.data)
+        crop = read_crop_sidecar(require_weights(args.weights))  # a collected dataset is cut as the weights were trained
         # a collected dataset given here is held out as a whole, unless --val-fraction says otherwise
-        data_yaml = _yolo_data(data, Path(tmp) / "yolo", args.val_fraction if args.val_fraction else 1.0, overwrite=True)
+        data_yaml = _yolo_data(data, Path(tmp) / "yolo", args.val_fraction if args.val_fraction else 1.0, overwrite=True,
+                               crop=crop is not None, crop_box=crop)
         if args.json:  # keep stdout pure JSON: ultralytics logs its banner and table to stdout
             import contextlib
 
@@ -84,6 +93,8 @@ def cmd_eval_detector(args) -> int:
     if args.json:
         print(json.dumps(result, indent=1, default=str))
         return 0
+    if result.get("crop"):
+        print(f"on the crop {result['crop']} of each frame (the pick area the weights were trained on)")
     print(f"mAP50 {result['map50']:.3f}   mAP50-95 {result['map50_95']:.3f}   precision {result['precision']:.3f}   recall {result['recall']:.3f}")
     for name, row in result.get("per_class", {}).items():
         print(f"  {name:6s} precision {row['precision']:.3f}  recall {row['recall']:.3f}  mAP50 {row['map50']:.3f}  "
@@ -104,6 +115,7 @@ def add_parsers(sub) -> None:
     sp.add_argument("--device", help="cpu, cuda, cuda:N or auto")
     sp.add_argument("--seed", type=int)
     sp.add_argument("--val-fraction", type=float, default=0.2, help="episodes held out when exporting a dataset")
+    sp.add_argument("--no-crop", action="store_true", help="when exporting a dataset: whole frames, not the pick area")
     sp.add_argument("--overwrite", action="store_true")
     sp.set_defaults(func=cmd_train_detector)
 

@@ -1,6 +1,10 @@
 """The YOLO detector (ultralytics): local weights only, one RGB image in, the paper's six numbers
 per object out (box, confidence, class), most confident first.
 
+Weights trained on frames cut to the pick area (`best.crop.json` beside them, see
+`yolo_data.pick_area_crop`) get the same cut: the image is cropped before predicting and the boxes
+shifted back, so callers always see full-image pixels.
+
 Never downloads: a weights path that is not a file is an error before ultralytics sees it (it
 would otherwise fetch any name it knows, e.g. `yolo11n.pt`).
 """
@@ -13,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from sortbot.perception.detection import Detection, by_confidence
+from sortbot.perception.yolo_data import CropBox, read_crop_sidecar
 from sortbot.perception.yolo_offline import import_yolo, ultralytics_device
 from sortbot.types import CLASS_NAMES, Observation
 
@@ -27,6 +32,7 @@ class DetectorConfig:
     device: str = "auto"  # cpu | cuda | cuda:N | auto
     max_detections: int = 50
     agnostic_nms: bool = False  # per-class NMS keeps a second class guess; target selection resolves it
+    crop: CropBox | None = None  # None: the crop recorded beside the weights (none recorded: whole frames)
 
 
 def trained_imgsz(model) -> int | None:
@@ -60,12 +66,15 @@ class YoloDetector:
         self.names = names
         self.imgsz = int(self.config.imgsz or trained_imgsz(self.model) or DEFAULT_IMGSZ)
         self.device = ultralytics_device(self.config.device)
+        self.crop = self.config.crop or read_crop_sidecar(self.weights)
 
     def predict_rgb(self, rgb: np.ndarray) -> list[Detection]:
-        """Detections on an RGB uint8 (H, W, 3) image, most confident first."""
+        """Detections on a full RGB uint8 (H, W, 3) frame, most confident first, boxes in its pixels
+        (cut to the weights' crop first, when they have one)."""
         if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
             raise ValueError(f"expected an RGB uint8 image (H, W, 3), got {rgb.dtype} {rgb.shape}")
-        bgr = np.ascontiguousarray(rgb[..., ::-1])  # ultralytics reads numpy images as OpenCV BGR
+        seen = self.crop.apply(rgb) if self.crop is not None else rgb
+        bgr = np.ascontiguousarray(seen[..., ::-1])  # ultralytics reads numpy images as OpenCV BGR
         cfg = self.config
         result = self.model.predict(
             source=bgr, imgsz=self.imgsz, conf=cfg.confidence, iou=cfg.iou, device=self.device,
@@ -74,8 +83,9 @@ class YoloDetector:
         xyxy = boxes.xyxy.cpu().numpy().astype(float)
         conf = boxes.conf.cpu().numpy().astype(float)
         cls = boxes.cls.cpu().numpy().astype(int)
+        to_full = self.crop.box_to_full if self.crop is not None else (lambda b: tuple(float(v) for v in b))
         return by_confidence(
-            Detection(box=tuple(float(v) for v in b), confidence=float(c), cls=self.names[int(k)])
+            Detection(box=to_full(b), confidence=float(c), cls=self.names[int(k)])
             for b, c, k in zip(xyxy, conf, cls))
 
     def predict(self, observation: Observation) -> list[Detection]:

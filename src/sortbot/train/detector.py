@@ -3,7 +3,9 @@
 From scratch (an architecture yaml such as `yolo11n.yaml`, shipped inside ultralytics) or from a
 local checkpoint; never from weights that would have to be downloaded. Everything lands in
 `out_dir`: ultralytics' run in `out_dir/yolo/`, the best weights as `out_dir/best.pt`, the checked
-data.yaml and `metrics.json` (the held-out figures of the best weights plus the settings).
+data.yaml and `metrics.json` (the held-out figures of the best weights plus the settings). A set
+cut to the pick area (its data.yaml records a `crop`) leaves that crop beside the weights
+(`best.crop.json`, and in metrics.json) so that `YoloDetector` cuts its input the same way.
 """
 
 from __future__ import annotations
@@ -15,11 +17,12 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from sortbot.perception.detector import require_weights
-from sortbot.perception.yolo_data import summarize_metrics, write_resolved
+from sortbot.perception.yolo_data import (CROP_KEY, CropBox, crop_sidecar, read_crop, summarize_metrics,
+                                         write_crop_sidecar, write_resolved)
 from sortbot.perception.yolo_offline import import_yolo, ultralytics_device
 
 RUN_NAME = "yolo"
-OUTPUTS = (RUN_NAME, "best.pt", "data.yaml", "metrics.json")  # what train_detector writes in out_dir
+OUTPUTS = (RUN_NAME, "best.pt", crop_sidecar("best.pt").name, "data.yaml", "metrics.json")  # what train_detector writes in out_dir
 
 
 @dataclass
@@ -66,6 +69,7 @@ class DetectorTrainResult:
     imgsz: int
     device: str
     out_dir: Path
+    crop: CropBox | None = None  # the part of the full frames the detector sees (None: all of it)
 
 
 def _prepare_out_dir(out_dir: Path, overwrite: bool) -> None:
@@ -102,6 +106,7 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     out_dir = Path(out_dir).expanduser().resolve()
     _prepare_out_dir(out_dir, overwrite)
     data = write_resolved(data_yaml, out_dir)
+    crop = read_crop(data)
     device = ultralytics_device(cfg.device)
     model = _load_model(cfg)
     t0 = time.perf_counter()
@@ -116,12 +121,14 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     best = trainer.best if Path(trainer.best).exists() else trainer.last
     weights = out_dir / "best.pt"
     shutil.copyfile(best, weights)
+    write_crop_sidecar(weights, crop)
     summary = summarize_metrics(metrics)
     epochs_run = int(trainer.epoch) + 1
     record = {
         **summary, "weights": str(weights), "train_seconds": seconds, "epochs": cfg.epochs,
         "epochs_run": epochs_run, "imgsz": cfg.imgsz, "device": device, "data": str(data), "config": asdict(cfg),
+        **(crop.record() if crop else {CROP_KEY: None}),
     }
     (out_dir / "metrics.json").write_text(json.dumps(record, indent=1))
     return DetectorTrainResult(weights=weights, metrics=summary, train_seconds=seconds, epochs=cfg.epochs,
-                               epochs_run=epochs_run, imgsz=cfg.imgsz, device=device, out_dir=out_dir)
+                               epochs_run=epochs_run, imgsz=cfg.imgsz, device=device, out_dir=out_dir, crop=crop)
