@@ -169,5 +169,8 @@ class DatasetConfig:
     depth_max: float = 1.5
     depth_use_log: bool = False
     rgb_crf: int = 23  # libsvtav1 quality for the RGB video (lower = better, larger)
+    # episodes staged (each its own small dataset) before they are folded into the dataset with
+    # lerobot's aggregation: a fold copies the whole dataset, so larger is cheaper for long runs
+    fold_every: int = 50
     mcap_image_format: str = "png"  # /camera/rgb CompressedImage format: png (lossless) or jpeg
     mcap_jpeg_quality: int = 90

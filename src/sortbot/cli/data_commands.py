@@ -68,6 +68,9 @@ def cmd_datasets_info(args) -> int:
         ("classes in labels", ", ".join(f"{k}: {v}" for k, v in info["class_balance_labels"].items())),
         ("size on disk", f"{info['size_bytes'] / 2**20:.1f} MiB ({info['bytes_per_frame'] / 1024:.0f} KiB/frame)"),
     ]
+    if info["staged_episodes"]:
+        lines.append(("not folded in yet", f"{info['staged_episodes']} finished episodes in {info['staging_dir']} "
+                                           "(a run was stopped early): `sortbot collect ... --resume` folds them in"))
     for key, value in lines:
         print(f"{key:20s} {value}")
     return 0

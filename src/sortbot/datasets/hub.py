@@ -8,7 +8,7 @@ import socket
 from pathlib import Path
 from urllib.parse import urlparse
 
-from sortbot.datasets.lerobot_store import BACKUP_DIR, read_collection
+from sortbot.datasets.lerobot_store import read_collection
 from sortbot.datasets.summary import resolve_root
 
 HUB_ENDPOINT = "https://huggingface.co"
@@ -20,7 +20,7 @@ def files_to_upload(root: Path) -> list[tuple[str, int]]:
     root = resolve_root(root)
     read_collection(root)
     return sorted((str(p.relative_to(root)), p.stat().st_size) for p in root.rglob("*")
-                  if p.is_file() and BACKUP_DIR not in p.parts and not p.name.endswith(".tmp"))
+                  if p.is_file() and not p.name.endswith(".tmp"))
 
 
 def _check_hub_reachable(endpoint: str) -> None:

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from sortbot.datasets.features import ACTION_KEY, LABELS_KEY, label_rows
-from sortbot.datasets.lerobot_store import read_collection, read_episode_records
+from sortbot.datasets.lerobot_store import (is_dataset, read_collection, read_episode_records, staged_episodes,
+                                            staging_dir, total_episodes)
 from sortbot.types import CLASS_NAMES, Primitive
 
 
@@ -17,7 +18,13 @@ def resolve_root(path: Path) -> Path:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist: give a folder written by `sortbot collect`")
-    return path / "lerobot" if (path / "lerobot" / "meta" / "info.json").is_file() else path
+    root = path / "lerobot" if is_dataset(path / "lerobot") else path
+    if is_dataset(root) and total_episodes(root) == 0:  # lerobot would try to download an empty one
+        staged = len(staged_episodes(root))
+        raise ValueError(f"{root} holds no episodes yet" + (
+            f"; {staged} finished episodes wait in {staging_dir(root)}: `sortbot collect ... --resume` folds them in"
+            if staged else ": collect some with `sortbot collect`"))
+    return root
 
 
 def load_table(root: Path) -> dict[str, np.ndarray]:
@@ -72,5 +79,8 @@ def dataset_summary(path: Path) -> dict:
         "class_balance_scenes": dict(sorted(scene_classes.items())),
         "class_balance_labels": dict(sorted(frame_classes.items())),
         "size_bytes": size,
+        # committed by a run that was killed before folding them in; `collect --resume` folds them
+        "staged_episodes": len(staged_episodes(root)),
+        "staging_dir": str(staging_dir(root)),
         "bytes_per_frame": size / max(len(actions), 1),
     }
