@@ -162,3 +162,14 @@ def test_commits_leave_no_hf_cache_behind(tmp_path, monkeypatch):
     monkeypatch.setattr(datasets.config, "HF_DATASETS_CACHE", tmp_path / "hf_cache")
     collect(small_request(tmp_path / "run", episodes=3))
     assert not list((tmp_path / "hf_cache").rglob("*.arrow"))
+
+
+def test_append_folds_every_k_episodes(collected, third_episode, tmp_path):
+    """With fold_every=1 the committed episode is in the dataset itself right after append."""
+    root = _copy_collected(collected, tmp_path)
+    store = EpisodeStore.open(root)
+    store.config.fold_every = 1
+    assert store.append(third_episode.frames, third_episode.task, third_episode.meta) == 2
+    assert not staged_episodes(root)
+    assert _load(root).meta.total_episodes == 3
+    assert [r["episode_index"] for r in read_episode_records(root)] == [0, 1, 2]
