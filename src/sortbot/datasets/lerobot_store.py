@@ -200,7 +200,7 @@ class EpisodeStore:
             dataset = self._new_dataset(folder)
             for frame in frames:
                 dataset.add_frame({**frame, "task": task})
-            dataset.save_episode()
+            dataset.save_episode(parallel_encoding=False)  # lerobot would fork this (big, threaded) process per episode
             dataset.finalize()
         del dataset
         _atomic_write(folder / STAGED_RECORD, json.dumps({"episode_index": index, **episode}, default=str))  # commit
