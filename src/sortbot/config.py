@@ -172,5 +172,6 @@ class DatasetConfig:
     # episodes staged (each its own small dataset) before they are folded into the dataset with
     # lerobot's aggregation: a fold copies the whole dataset, so larger is cheaper for long runs
     fold_every: int = 50
+    encode_attempts: int = 3  # lerobot's HEVC depth encoding fails intermittently (PyAV PatchWelcomeError)
     mcap_image_format: str = "png"  # /camera/rgb CompressedImage format: png (lossless) or jpeg
     mcap_jpeg_quality: int = 90

@@ -165,11 +165,15 @@ def test_commits_leave_no_hf_cache_behind(tmp_path, monkeypatch):
 
 
 def test_append_folds_every_k_episodes(collected, third_episode, tmp_path):
-    """With fold_every=1 the committed episode is in the dataset itself right after append."""
+    """With fold_every=1 the committed episode is in the dataset itself right after append; a
+    1-frame episode folds in too (lerobot's stats of a single frame keep the bool dtype)."""
     root = _copy_collected(collected, tmp_path)
     store = EpisodeStore.open(root)
     store.config.fold_every = 1
     assert store.append(third_episode.frames, third_episode.task, third_episode.meta) == 2
     assert not staged_episodes(root)
-    assert _load(root).meta.total_episodes == 3
-    assert [r["episode_index"] for r in read_episode_records(root)] == [0, 1, 2]
+    assert store.append(third_episode.frames[:1], third_episode.task, third_episode.meta) == 3
+    ds = _load(root)
+    assert ds.meta.total_episodes == 4
+    assert len(ds) == len(_load(collected[0] / "lerobot")) + len(third_episode.frames) + 1
+    assert [r["episode_index"] for r in read_episode_records(root)] == [0, 1, 2, 3]

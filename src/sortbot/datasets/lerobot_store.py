@@ -29,6 +29,8 @@ import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
+import av
+
 from sortbot.config import DatasetConfig
 from sortbot.datasets.features import DEPTH_KEY, RGB_KEY, dataset_features
 
@@ -51,6 +53,7 @@ def _quiet() -> None:
 
     os.environ.setdefault("SVT_LOG", "1")  # errors only
     datasets.disable_progress_bars()
+    av.logging.set_level(av.logging.ERROR)  # FFmpeg's muxer warnings about made-up timestamps
 
 
 def _encoders(config: DatasetConfig):
@@ -194,6 +197,20 @@ class EpisodeStore:
             raise ValueError("an episode needs at least one frame (the scene was already done at reset)")
         index = self.committed_episodes
         folder = staging_dir(self.root) / f"episode_{index:06d}"
+        for attempt in range(self.config.encode_attempts):
+            try:
+                self._write_staged(folder, frames, task)
+                break
+            except av.error.FFmpegError:  # x265 fails now and then on a clip it encodes fine the next time
+                if attempt + 1 == self.config.encode_attempts:
+                    raise
+        _atomic_write(folder / STAGED_RECORD, json.dumps({"episode_index": index, **episode}, default=str))  # commit
+        if len(staged_episodes(self.root)) >= self.config.fold_every:
+            self.fold()
+        release_memory()
+        return index
+
+    def _write_staged(self, folder: Path, frames: list[dict], task: str) -> None:
         shutil.rmtree(folder, ignore_errors=True)  # a half-written try at this episode
         folder.parent.mkdir(parents=True, exist_ok=True)
         with _lerobot_chatter_held(), _private_hf_cache():
@@ -202,12 +219,8 @@ class EpisodeStore:
                 dataset.add_frame({**frame, "task": task})
             dataset.save_episode(parallel_encoding=False)  # lerobot would fork this (big, threaded) process per episode
             dataset.finalize()
-        del dataset
-        _atomic_write(folder / STAGED_RECORD, json.dumps({"episode_index": index, **episode}, default=str))  # commit
-        if len(staged_episodes(self.root)) >= self.config.fold_every:
-            self.fold()
-        release_memory()
-        return index
+        if len(frames) == 1:
+            _float_stats_of_single_frame(folder)
 
     def fold(self) -> int:
         """Move the staged episodes into the dataset (lerobot's aggregation into a fresh folder,
@@ -252,6 +265,24 @@ class EpisodeStore:
         rgb, depth = _encoders(self.config)
         return LeRobotDataset.create(self.repo_id, fps=self.config.fps, features=feats, root=root,
                                      robot_type="ur3", rgb_encoder=rgb, depth_encoder=depth)
+
+
+def _float_stats_of_single_frame(root: Path) -> None:
+    """lerobot computes a 1-frame episode's min/max/quantiles in the feature's own dtype (bool for
+    `next.done`) but a longer one's as float64; its aggregation then cannot put both in one parquet
+    column ("Cannot mix NumPy dtypes float64 and bool"). Store them as float64 like the others."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    for path in sorted((Path(root) / "meta" / "episodes").rglob("*.parquet")):
+        table = pq.read_table(path)
+        fields = [pa.field(f.name, pa.list_(pa.float64())) if f.name.startswith("stats/") and f.type == pa.list_(pa.bool_())
+                  else f for f in table.schema]
+        fixed = pa.schema(fields, metadata=table.schema.metadata)
+        if fixed != table.schema:
+            tmp = path.with_name(path.name + ".tmp")
+            pq.write_table(table.cast(fixed), tmp)
+            tmp.replace(path)
 
 
 def recover(root: Path) -> bool:
