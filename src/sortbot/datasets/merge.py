@@ -33,6 +33,7 @@ def merge_datasets(sources: list[Path], out: Path, overwrite: bool = False, repo
     aggregate_datasets(
         repo_ids=[f"local/merge_source_{k}" for k in range(len(roots))],
         aggr_repo_id=repo_id or collections[0]["repo_id"], roots=roots, aggr_root=target,
+        concatenate_videos=False,  # lerobot's remux of clips into one file fails on some (non-monotonic dts)
     )
     merged = {k: collections[0].get(k) if all(c.get(k) == collections[0].get(k) for c in collections) else "mixed"
               for k in SHARED_KEYS}
