@@ -49,7 +49,8 @@ def test_pick_area_crop_follows_the_camera_and_round_trips_boxes():
 
     from sortbot.config import CameraConfig, WorkspaceConfig
     from sortbot.perception.heightmap import camera_points, to_base
-    from sortbot.perception.yolo_data import CropBox, CropConfig, camera_from_config, pick_area_crop, project_points
+    from sortbot.perception.yolo_data import CropBox, CropConfig, pick_area_crop, project_points
+    from sortbot.sim.camera import camera_from_config
 
     intrinsics, pose = camera_from_config(CameraConfig())
     # projecting is the inverse of the heightmap's back-projection

@@ -138,7 +138,8 @@ def test_refusals_happen_before_any_training(yolo_set, tmp_path):
 
 def test_training_on_the_pick_area_crop_carries_it_to_the_detector_and_eval(yolo_set, tmp_path, no_network):
     from sortbot.datasets.yolo_export import crop_yolo_set
-    from sortbot.perception.yolo_data import camera_from_config, pick_area_crop, read_crop
+    from sortbot.perception.yolo_data import pick_area_crop, read_crop
+    from sortbot.sim.camera import camera_from_config
 
     data_yaml, _, obs = yolo_set
     intrinsics, pose = camera_from_config(EnvConfig().camera)  # what the renderer's camera reports, without one

@@ -18,8 +18,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from sortbot.config import CameraConfig, WorkspaceConfig
-from sortbot.sim.scene_mjcf import camera_axes
+from sortbot.config import WorkspaceConfig
 from sortbot.types import CLASS_NAMES, CameraIntrinsics, CameraPose
 
 SPLITS = ("train", "val", "test")
@@ -184,15 +183,6 @@ class CropBox:
         """A box in crop pixels back in full-image pixels."""
         x1, y1, x2, y2 = (float(v) for v in box)
         return x1 + self.x0, y1 + self.y0, x2 + self.x0, y2 + self.y0
-
-
-def camera_from_config(camera: CameraConfig) -> tuple[CameraIntrinsics, CameraPose]:
-    """The intrinsics and pose `sim.camera.RGBDCamera` gives a camera of this config (square pixels,
-    principal point at the centre, looking from `position` at `lookat`), without rendering."""
-    right, up, forward = camera_axes(np.array(camera.position, float), np.array(camera.lookat, float))
-    intrinsics = CameraIntrinsics(fx=camera.focal_length, fy=camera.focal_length, cx=camera.width / 2,
-                                  cy=camera.height / 2, width=camera.width, height=camera.height)
-    return intrinsics, CameraPose(position=np.array(camera.position, float), rotation=np.stack([right, -up, forward], axis=1))
 
 
 def project_points(points: np.ndarray, intrinsics: CameraIntrinsics, pose: CameraPose) -> np.ndarray:

@@ -18,18 +18,22 @@ _GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # a plain int: comparing an array to the 
 MIN_VISIBLE_PIXELS = 15  # fewer segmentation pixels than this and the object is not labelled
 
 
+def camera_from_config(cfg: CameraConfig) -> tuple[CameraIntrinsics, CameraPose]:
+    """Intrinsics and pose of a camera of this config (square pixels, principal point at the
+    centre, looking from `position` at `lookat`); usable without a renderer."""
+    intrinsics = CameraIntrinsics(fx=cfg.focal_length, fy=cfg.focal_length, cx=cfg.width / 2, cy=cfg.height / 2,
+                                  width=cfg.width, height=cfg.height)
+    right, up, forward = camera_axes(np.array(cfg.position, float), np.array(cfg.lookat, float))
+    # OpenCV optical frame: x right, y down, z forward
+    return intrinsics, CameraPose(position=np.array(cfg.position, float), rotation=np.stack([right, -up, forward], axis=1))
+
+
 class RGBDCamera:
     def __init__(self, world: World, cfg: CameraConfig):
         self.world = world
         self.cfg = cfg
         self.renderer = mujoco.Renderer(world.model, height=cfg.height, width=cfg.width)
-        self.intrinsics = CameraIntrinsics(
-            fx=cfg.focal_length, fy=cfg.focal_length, cx=cfg.width / 2, cy=cfg.height / 2,
-            width=cfg.width, height=cfg.height,
-        )
-        right, up, forward = camera_axes(np.array(cfg.position), np.array(cfg.lookat))
-        # OpenCV optical frame: x right, y down, z forward
-        self.pose = CameraPose(position=np.array(cfg.position, float), rotation=np.stack([right, -up, forward], axis=1))
+        self.intrinsics, self.pose = camera_from_config(cfg)
 
     def render(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """RGB (H, W, 3) uint8, depth (H, W) float32 metres, instance map (H, W) int32 (0 = none)."""
