@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from sortbot.config import DatasetConfig
-from sortbot.types import CLASS_NAMES, Action, Observation, Outcome
+from sortbot.types import CLASS_NAMES, Action, CameraIntrinsics, CameraPose, Observation, Outcome
 
 RGB_KEY = "observation.images.rgb"
 DEPTH_KEY = "observation.images.depth"
@@ -113,3 +113,11 @@ def camera_info(obs: Observation) -> dict:
         "camera.width": k.width, "camera.height": k.height,
         "camera.pose": obs.camera_pose.matrix().round(9).tolist(),  # camera -> base, OpenCV optical axes
     }
+
+
+def camera_from_info(info: dict) -> tuple[CameraIntrinsics, CameraPose]:
+    """The inverse of `camera_info`: intrinsics and pose from a camera feature's `info`."""
+    intrinsics = CameraIntrinsics(fx=float(info["camera.fx"]), fy=float(info["camera.fy"]), cx=float(info["camera.cx"]),
+                                  cy=float(info["camera.cy"]), width=int(info["camera.width"]), height=int(info["camera.height"]))
+    pose = np.asarray(info["camera.pose"], float)
+    return intrinsics, CameraPose(position=pose[:3, 3], rotation=pose[:3, :3])

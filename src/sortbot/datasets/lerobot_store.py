@@ -14,7 +14,7 @@ opening the store again finishes or undoes a half-done fold and drops a half-wri
     DIR/lerobot.staging/episode_N/  committed episodes not folded yet (each a stock dataset)
 
 sortbot's own metadata sits next to lerobot's in `meta/`: `sortbot.json` (how the data was
-collected: policy, scene and env config, camera, versions) and `sortbot_episodes.jsonl` (seed,
+collected: policy, scene and env config, versions) and `sortbot_episodes.jsonl` (seed,
 scene and end of every episode).
 """
 
@@ -38,7 +38,6 @@ COLLECTION_FILE = "meta/sortbot.json"
 EPISODES_FILE = "meta/sortbot_episodes.jsonl"
 STAGED_RECORD = "meta/sortbot_staged.json"  # its presence commits a staged episode
 DEFAULT_REPO_ID = "local/sortbot"
-CAMERA_PREFIX = "camera."
 
 
 class NotADatasetError(ValueError):
@@ -173,7 +172,7 @@ class EpisodeStore:
         store = cls(root, config, camera, repo_id)
         shutil.rmtree(staging_dir(root), ignore_errors=True)
         store._new_dataset(store.root).finalize()  # an empty dataset: valid, and holds sortbot.json
-        record = {**collection, "repo_id": repo_id, "dataset_config": asdict(config), "camera": camera}
+        record = {**collection, "repo_id": repo_id, "dataset_config": asdict(config)}
         _atomic_write(store.root / COLLECTION_FILE, json.dumps(record, indent=1, default=str))
         (store.root / EPISODES_FILE).touch()
         return store
@@ -183,8 +182,7 @@ class EpisodeStore:
         """Reopen for appending, after finishing or undoing whatever a killed run left half done."""
         recover(root)
         collection = read_collection(root)
-        camera = collection.get("camera") or _camera_from_features(root)
-        return cls(root, DatasetConfig(**collection["dataset_config"]), camera, collection["repo_id"])
+        return cls(root, DatasetConfig(**collection["dataset_config"]), recorded_camera(root), collection["repo_id"])
 
     @property
     def committed_episodes(self) -> int:
@@ -285,22 +283,18 @@ def _float_stats_of_single_frame(root: Path) -> None:
             tmp.replace(path)
 
 
-def recover(root: Path) -> bool:
-    """Finish or undo what a killed run left half done; returns True when something was repaired.
+def recover(root: Path) -> None:
+    """Finish or undo what a killed run left half done.
 
     A fold killed before its swap leaves `.folding` (dropped: the staged episodes are still
     there); one killed between the two renames leaves `.old` + a complete `.folding`. Staged
     folders without their commit record, or already folded, are dropped."""
     root = Path(root)
     folding, old = _folding_dir(root), _old_dir(root)
-    repaired = False
     if not root.exists() and old.exists():
         (folding if folding.exists() else old).rename(root)
-        repaired = True
     for leftover in (folding, old):
-        if leftover.exists():
-            shutil.rmtree(leftover)
-            repaired = True
+        shutil.rmtree(leftover, ignore_errors=True)
     folder = staging_dir(root)
     if folder.is_dir():
         expected = total_episodes(root)
@@ -309,14 +303,13 @@ def recover(root: Path) -> bool:
                 expected += 1
                 continue
             shutil.rmtree(path)  # half written, already folded, or after a gap
-            repaired = True
-    return repaired
 
 
-def _camera_from_features(root: Path) -> dict:
+def recorded_camera(root: Path) -> dict:
+    """The camera entries (`features.camera_info`) lerobot keeps in the RGB feature's info."""
     info = json.loads((Path(root) / "meta" / "info.json").read_text())
     video_info = info["features"][RGB_KEY].get("info", {})
-    return {k: v for k, v in video_info.items() if k.startswith(CAMERA_PREFIX)}
+    return {k: v for k, v in video_info.items() if k.startswith("camera.")}
 
 
 def _write_episode_records(root: Path, records: list[dict]) -> None:

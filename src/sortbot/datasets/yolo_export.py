@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from sortbot.datasets.features import LABELS_KEY, RGB_KEY, label_rows
+from sortbot.datasets.features import LABELS_KEY, RGB_KEY, camera_from_info, label_rows
 from sortbot.datasets.lerobot_store import read_collection
 from sortbot.datasets.summary import resolve_root
 from sortbot.perception.yolo_data import CropBox, CropConfig, pick_area_crop, read_data_yaml
-from sortbot.types import CLASS_NAMES, CameraIntrinsics, CameraPose
+from sortbot.types import CLASS_NAMES
 
 
 @dataclass
@@ -73,17 +73,14 @@ def dataset_crop(ds, collection: dict, config: CropConfig) -> CropBox:
     and the workspace recorded in its collection metadata (defaults where a field is missing)."""
     from sortbot.config import WorkspaceConfig
 
-    info = ds.meta.features[RGB_KEY].get("info") or {}
     try:
-        intrinsics = CameraIntrinsics(fx=float(info["camera.fx"]), fy=float(info["camera.fy"]), cx=float(info["camera.cx"]),
-                                      cy=float(info["camera.cy"]), width=int(info["camera.width"]), height=int(info["camera.height"]))
-        pose = np.asarray(info["camera.pose"], float)
+        intrinsics, pose = camera_from_info(ds.meta.features[RGB_KEY].get("info") or {})
     except KeyError as err:
         raise ValueError(f"the dataset records no camera {err}: export whole frames (--no-crop)") from None
     ws = ((collection.get("env_config") or {}).get("workspace")) or {}
     workspace = WorkspaceConfig(**{k: tuple(ws[k]) if isinstance(ws.get(k), list) else ws[k]
                                    for k in ("pick_min", "pick_max", "table_height") if k in ws})
-    return pick_area_crop(intrinsics, CameraPose(position=pose[:3, 3], rotation=pose[:3, :3]), workspace, config)
+    return pick_area_crop(intrinsics, pose, workspace, config)
 
 
 def export_yolo(path: Path, out: Path, config: YoloExportConfig | None = None, overwrite: bool = False,
