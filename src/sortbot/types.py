@@ -38,6 +38,11 @@ class CameraIntrinsics:
     def matrix(self) -> np.ndarray:
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
+    def project(self, cam: np.ndarray) -> np.ndarray:
+        """Camera-frame points (N, 3), z forward, to pixel coordinates (N, 2)."""
+        cam = np.asarray(cam, float)
+        return np.stack([cam[:, 0] / cam[:, 2] * self.fx + self.cx, cam[:, 1] / cam[:, 2] * self.fy + self.cy], axis=1)
+
 
 @dataclass(frozen=True)
 class CameraPose:

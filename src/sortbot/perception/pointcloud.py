@@ -107,8 +107,7 @@ def object_cloud(depth: np.ndarray, intrinsics: CameraIntrinsics, pose: CameraPo
     cam = np.asarray(pcd.points)
     pcd = pcd.select_by_index(np.flatnonzero(cam[:, 2] >= cfg.z_near))
     cam = np.asarray(pcd.points).copy()
-    pixels = np.stack([cam[:, 0] / cam[:, 2] * intrinsics.fx + intrinsics.cx,
-                       cam[:, 1] / cam[:, 2] * intrinsics.fy + intrinsics.cy], axis=1)
+    pixels = intrinsics.project(cam)
     pcd.transform(pose.matrix())
     pts = np.asarray(pcd.points)
     height = pts[:, 2] - cfg.table_height

@@ -191,7 +191,7 @@ def project_points(points: np.ndarray, intrinsics: CameraIntrinsics, pose: Camer
     cam = (np.asarray(points, float) - np.asarray(pose.position, float)) @ np.asarray(pose.rotation, float)
     if np.any(cam[:, 2] <= 0):
         raise ValueError("a point to project lies behind the camera")
-    return cam[:, :2] / cam[:, 2:] * [intrinsics.fx, intrinsics.fy] + [intrinsics.cx, intrinsics.cy]
+    return intrinsics.project(cam)
 
 
 def pick_area_crop(intrinsics: CameraIntrinsics, pose: CameraPose, workspace: WorkspaceConfig | None = None,
