@@ -81,7 +81,7 @@ def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_net
     data_yaml, val_counts, obs = yolo_set
     monkeypatch.chdir(tmp_path)  # nothing may land in the working directory
     out = tmp_path / "detector"
-    result = train_detector(data_yaml, out, DetectorTrainConfig(**TINY))
+    result = train_detector(data_yaml, out, DetectorTrainConfig(**TINY, cpu_threads=2))
 
     assert result.weights == out / "best.pt" and result.weights.is_file()
     assert result.epochs_run == 1 and result.imgsz == 64 and result.device == "cpu"
@@ -91,9 +91,14 @@ def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_net
     assert record["train_seconds"] > 0 and record["config"]["imgsz"] == 64
     assert sorted(p.name for p in tmp_path.iterdir()) == ["detector"]  # no ./runs, no downloaded weights
 
-    again = train_detector(data_yaml, tmp_path / "again", DetectorTrainConfig(**TINY))  # the same seed...
+    thread_counts = []  # ultralytics sets cores - 1 threads; the trainer must get the count asked for
+    real_set_threads = torch.set_num_threads
+    monkeypatch.setattr(torch, "set_num_threads", lambda n: (thread_counts.append(n), real_set_threads(n)))
+    again = train_detector(data_yaml, tmp_path / "again", DetectorTrainConfig(**TINY, cpu_threads=2))  # the same seed...
+    monkeypatch.setattr(torch, "set_num_threads", real_set_threads)
+    assert 2 in thread_counts
     first, second = _state(result.weights), _state(again.weights)
-    assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)  # ...same weights
+    assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)  # ...same weights (the thread count is part of the seed: float sums change with it)
     assert again.metrics == result.metrics
 
     detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
