@@ -36,7 +36,8 @@ class DetectorTrainConfig:
     export-yolo now applies by default (1.45x the pixels per object) won 0.36 vs 0.29 mAP50 in
     6-epoch probes, but a full run on it (imgsz 416, 22 epochs, 68 min) ended level: mAP50 0.787 /
     mAP50-95 0.556 (knife 0.78, fork 0.79, spoon 0.79), class-agnostic 0.93. Continued from that
-    checkpoint (`init`) for 25 more epochs (72 min): mAP50 0.844 / mAP50-95 0.646, still rising, train
+    checkpoint (`init`) for 25 more epochs (72 min): mAP50 0.844 / mAP50-95 0.646, and 12 more on
+    both cores (20.5 min): 0.856 / 0.656, still rising, train
     and val losses level (under-trained, not over-fitted). Neither hiding half-covered objects from
     the labels (+0.01) nor oriented boxes (a 6-epoch probe: worse) helped: what is missing is
     training steps. The 0.95 target is not reached on 2 CPU cores."""
