@@ -37,7 +37,7 @@ class DetectorTrainConfig:
     6-epoch probes, but a full run on it (imgsz 416, 22 epochs, 68 min) ended level: mAP50 0.787 /
     mAP50-95 0.556 (knife 0.78, fork 0.79, spoon 0.79), class-agnostic 0.93. Continued from that
     checkpoint (`init`) for 25 more epochs (72 min): mAP50 0.844 / mAP50-95 0.646, and 12 more on
-    both cores (20.5 min): 0.856 / 0.656, still rising, train
+    both cores (20.5 min): 0.856 / 0.656, and 14 more (23.8 min): 0.868 / 0.671, still rising, train
     and val losses level (under-trained, not over-fitted). Neither hiding half-covered objects from
     the labels (+0.01) nor oriented boxes (a 6-epoch probe: worse) helped: what is missing is
     training steps. The 0.95 target is not reached on 2 CPU cores."""
