@@ -28,19 +28,10 @@ OUTPUTS = (RUN_NAME, "best.pt", crop_sidecar("best.pt").name, "data.yaml", "metr
 
 @dataclass
 class DetectorTrainConfig:
-    """Defaults measured on 6-cutlery drops (899 train frames, 240 frames of held-out seeds), yolo11n
-    from scratch on 2 CPU cores: mAP50 0.79 / mAP50-95 0.56 after 30 epochs (57 min). More steps
-    beat bigger batches (6-epoch probes: batch 4 > 8 > 16), and 640 px learned only a little
-    more per epoch at 3.4x the time. Most errors are fork/knife/spoon confusions, not missed objects
-    (class-agnostic mAP50 0.93). These figures are on whole frames; the pick-area crop that
-    export-yolo now applies by default (1.45x the pixels per object) won 0.36 vs 0.29 mAP50 in
-    6-epoch probes, but a full run on it (imgsz 416, 22 epochs, 68 min) ended level: mAP50 0.787 /
-    mAP50-95 0.556 (knife 0.78, fork 0.79, spoon 0.79), class-agnostic 0.93. Continued from that
-    checkpoint (`init`) for 25 more epochs (72 min): mAP50 0.844 / mAP50-95 0.646, and 12 more on
-    both cores (20.5 min): 0.856 / 0.656, and 14 more (23.8 min): 0.868 / 0.671, still rising, train
-    and val losses level (under-trained, not over-fitted). Neither hiding half-covered objects from
-    the labels (+0.01) nor oriented boxes (a 6-epoch probe: worse) helped: what is missing is
-    training steps. The 0.95 target is not reached on 2 CPU cores."""
+    """Defaults measured on 6-cutlery drops, yolo11n from scratch on 2 CPU cores: more steps beat
+    bigger batches (6-epoch probes: batch 4 > 8 > 16) and 640 px learned little more per epoch at
+    3.4x the time. What limits mAP50 is training steps (train and val losses level, the curve still
+    rising at 73 epochs); the runs and their figures are in the README."""
 
     model: str = "yolo11n.yaml"  # architecture yaml (from scratch) or a local .pt
     init: str | None = None  # local checkpoint to start from (its weights, our classes)
@@ -66,7 +57,9 @@ class DetectorTrainConfig:
     cache: bool = False  # decoded images in RAM: faster, but ultralytics warns it is not deterministic
     val_every_epoch: bool = True  # needed for best.pt and early stopping; the last epoch is always validated
     plots: bool = True  # ultralytics' label/result/PR plots in the run folder
-    cpu_threads: int | None = None  # torch threads on a CPU; None: every core (ultralytics keeps one idle: half of a 2-core machine). Weights are reproducible for the same count only
+    # torch threads on a CPU; None: every core (ultralytics keeps one idle, half of a 2-core machine).
+    # The same seed gives the same weights only at the same count.
+    cpu_threads: int | None = None
 
 
 @dataclass
