@@ -1,6 +1,7 @@
 """One tiny YOLO epoch from scratch, with the network unreachable: train, predict, evaluate."""
 
 import json
+import os
 import socket
 from collections import Counter
 from pathlib import Path
@@ -77,11 +78,21 @@ def no_network(monkeypatch):
     return attempts
 
 
-def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_network, monkeypatch):
+@pytest.fixture
+def process_threads():
+    """A torch thread count that is neither ultralytics' (cores - 1) nor the trainer's (2), put back afterwards."""
+    before = torch.get_num_threads()
+    yield max(3, (os.cpu_count() or 1) + 1)
+    torch.set_num_threads(before)
+
+
+def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_network, monkeypatch, process_threads):
     data_yaml, val_counts, obs = yolo_set
     monkeypatch.chdir(tmp_path)  # nothing may land in the working directory
     out = tmp_path / "detector"
+    torch.set_num_threads(process_threads)
     result = train_detector(data_yaml, out, DetectorTrainConfig(**TINY, cpu_threads=2))
+    assert torch.get_num_threads() == process_threads  # ultralytics' count (cores - 1) and the trainer's stay inside training
 
     assert result.weights == out / "best.pt" and result.weights.is_file()
     assert result.epochs_run == 1 and result.imgsz == 64 and result.device == "cpu"
@@ -104,6 +115,7 @@ def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_net
     detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
     assert detector.imgsz == 64  # the size it was trained at
     dets = detector.predict(obs)
+    assert torch.get_num_threads() == process_threads  # predicting leaves the process's thread count alone
     assert 0 < len(dets) <= 20 and all(isinstance(d, Detection) for d in dets)
     conf = [d.confidence for d in dets]
     assert conf == sorted(conf, reverse=True)
@@ -113,6 +125,7 @@ def test_tiny_training_predicts_and_evaluates_offline(yolo_set, tmp_path, no_net
         assert d.cls in CLASS_NAMES and -1 <= x1 < x2 <= w + 1 and -1 <= y1 < y2 <= h + 1
 
     figures = evaluate_detector(result.weights, data_yaml, split="val", device="cpu")
+    assert torch.get_num_threads() == process_threads
     assert figures["split"] == "val" and figures["imgsz"] == 64 and 0.0 <= figures["map50"] <= 1.0
     # ultralytics counted exactly the held-out objects we labelled, class by class
     assert {c: v["instances"] for c, v in figures["per_class"].items()} == dict(val_counts)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from sortbot.perception.detector import DEFAULT_IMGSZ, require_weights, trained_imgsz
 from sortbot.perception.yolo_data import read_crop, read_crop_sidecar, summarize_metrics, write_resolved
-from sortbot.perception.yolo_offline import import_yolo, ultralytics_device
+from sortbot.perception.yolo_offline import import_yolo, torch_threads_kept, ultralytics_device
 
 VAL_CONFIDENCE = 0.001  # ultralytics' validation threshold: mAP integrates over all scores
 VAL_IOU = 0.7  # NMS IoU during validation
@@ -34,7 +34,7 @@ def evaluate_detector(weights: str | Path, data_yaml: str | Path, split: str = "
                          "evaluate on a set exported with the same crop")
     yolo = import_yolo()
     dev = ultralytics_device(device)
-    with tempfile.TemporaryDirectory(prefix="sortbot-val-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="sortbot-val-") as tmp, torch_threads_kept():
         folder = Path(out_dir).expanduser().resolve() if out_dir else Path(tmp)
         data = write_resolved(data_yaml, folder, splits=(split,))
         model = yolo(str(weights), task="detect")

@@ -18,7 +18,7 @@ import numpy as np
 
 from sortbot.perception.detection import Detection, by_confidence
 from sortbot.perception.yolo_data import CropBox, read_crop_sidecar
-from sortbot.perception.yolo_offline import import_yolo, ultralytics_device
+from sortbot.perception.yolo_offline import import_yolo, torch_threads_kept, ultralytics_device
 from sortbot.types import CLASS_NAMES, Observation
 
 DEFAULT_IMGSZ = 640  # ultralytics' own default, used when the checkpoint does not record its training size
@@ -76,9 +76,10 @@ class YoloDetector:
         seen = self.crop.apply(rgb) if self.crop is not None else rgb
         bgr = np.ascontiguousarray(seen[..., ::-1])  # ultralytics reads numpy images as OpenCV BGR
         cfg = self.config
-        result = self.model.predict(
-            source=bgr, imgsz=self.imgsz, conf=cfg.confidence, iou=cfg.iou, device=self.device,
-            max_det=cfg.max_detections, agnostic_nms=cfg.agnostic_nms, verbose=False)[0]
+        with torch_threads_kept():
+            result = self.model.predict(
+                source=bgr, imgsz=self.imgsz, conf=cfg.confidence, iou=cfg.iou, device=self.device,
+                max_det=cfg.max_detections, agnostic_nms=cfg.agnostic_nms, verbose=False)[0]
         boxes = result.boxes
         xyxy = boxes.xyxy.cpu().numpy().astype(float)
         conf = boxes.conf.cpu().numpy().astype(float)

@@ -15,6 +15,8 @@ import os
 import shutil
 import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 log = logging.getLogger(__name__)
@@ -108,3 +110,17 @@ def ultralytics_device(device: str) -> str:
             raise ValueError(f"device {device!r} asked for CUDA but torch sees no GPU: use 'cpu' or 'auto'")
         return name.split(":", 1)[1] if ":" in name else ("0" if name == "cuda" else name)
     raise ValueError(f"unknown device {device!r}: use cpu, cuda, cuda:N or auto")
+
+
+@contextmanager
+def torch_threads_kept() -> Iterator[None]:
+    """Give back the process's torch thread count after an ultralytics call: its device selection
+    sets it to cores - 1 (one on a 2-core machine) for the whole process, which would slow every
+    later torch job in it, e.g. the Q-network beside the detector."""
+    import torch
+
+    count = torch.get_num_threads()
+    try:
+        yield
+    finally:
+        torch.set_num_threads(count)

@@ -20,7 +20,7 @@ from pathlib import Path
 from sortbot.perception.detector import require_weights
 from sortbot.perception.yolo_data import (CROP_KEY, CropBox, crop_sidecar, read_crop, summarize_metrics,
                                          write_crop_sidecar, write_resolved)
-from sortbot.perception.yolo_offline import import_yolo, ultralytics_device
+from sortbot.perception.yolo_offline import import_yolo, torch_threads_kept, ultralytics_device
 
 RUN_NAME = "yolo"
 OUTPUTS = (RUN_NAME, "best.pt", crop_sidecar("best.pt").name, "data.yaml", "metrics.json")  # what train_detector writes in out_dir
@@ -129,12 +129,15 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     model = _load_model(cfg)
     _use_cpu_threads(model, cfg.cpu_threads)
     t0 = time.perf_counter()
-    metrics = model.train(
-        data=str(data), epochs=cfg.epochs, imgsz=cfg.imgsz, batch=cfg.batch, device=device, workers=cfg.workers,
-        seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
-        lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic, close_mosaic=cfg.close_mosaic,
-        scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr, flipud=cfg.flipud, rect=cfg.rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots, amp=False,  # AMP's self-check downloads weights
-        project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
+    with torch_threads_kept():  # the trainer's count is for training only, not the rest of the process
+        metrics = model.train(
+            data=str(data), epochs=cfg.epochs, imgsz=cfg.imgsz, batch=cfg.batch, device=device, workers=cfg.workers,
+            seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
+            lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic,
+            close_mosaic=cfg.close_mosaic, scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr,
+            flipud=cfg.flipud, rect=cfg.rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
+            amp=False,  # AMP's self-check downloads weights
+            project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
     seconds = time.perf_counter() - t0
     trainer = model.trainer
     best = trainer.best if Path(trainer.best).exists() else trainer.last
