@@ -86,7 +86,8 @@ def test_export_yolo_crops_to_the_pick_area_and_clips_labels(collected, tmp_path
     assert frame0.stem.endswith("f0000") and Image.open(frame0).size == (crop.width, crop.height)
     rows = [list(map(float, line.split())) for line in (yolo / "labels" / "train" / (frame0.stem + ".txt")).read_text().splitlines()]
     labels = label_rows(table["observation.labels"][0])
-    expected = [(row[1], crop.box_to_crop(row[2:6], YoloExportConfig.min_box_side)) for row in labels if row[0] > 0.5]
+    keep = (YoloExportConfig.min_box_side, YoloExportConfig.min_inside_fraction)
+    expected = [(row[1], crop.box_to_crop(row[2:6], *keep)) for row in labels if row[0] > 0.5]
     expected = [(k, b) for k, b in expected if b is not None]
     assert expected and len(rows) == len(expected)
     for (k, b), row in zip(expected, rows):

@@ -75,6 +75,8 @@ def test_pick_area_crop_follows_the_camera_and_round_trips_boxes():
     assert inside == (20.0, 10.0, 80.0, 40.0) and box.box_to_full(inside) == full
     assert box.box_to_crop((90, 40, 110, 260)) == (0.0, 0.0, 10.0, 200.0)  # clipped to the crop
     assert box.box_to_crop((90, 40, 102, 260), min_side=4) is None  # 2 px left inside
+    assert box.box_to_crop((80, 40, 110, 260), min_inside_fraction=0.25) is not None  # 10 of 30 px wide inside: 1/3
+    assert box.box_to_crop((60, 40, 110, 260), min_inside_fraction=0.25) is None  # 10 of 50 px wide inside: 1/5
     assert box.box_to_crop((400, 300, 420, 320)) is None  # wholly outside
     assert CropBox.from_record(box.record()) == box and CropBox.from_record({"crop": None}) is None
     with pytest.raises(ValueError, match="made for 640 x 480"):

@@ -169,13 +169,16 @@ class CropBox:
         self.check_image(image.shape[1], image.shape[0])
         return image[self.y0:self.y1, self.x0:self.x1]
 
-    def box_to_crop(self, box, min_side: float = 0.0) -> tuple[float, float, float, float] | None:
+    def box_to_crop(self, box, min_side: float = 0.0, min_inside_fraction: float = 0.0,
+                    ) -> tuple[float, float, float, float] | None:
         """A full-image box clipped to the crop, in crop pixels; None when less than `min_side`
-        pixels of it (in either direction) remain inside."""
-        x1, y1, x2, y2 = (float(v) for v in box)
-        x1, x2 = max(x1, self.x0) - self.x0, min(x2, self.x1) - self.x0
-        y1, y2 = max(y1, self.y0) - self.y0, min(y2, self.y1) - self.y0
+        pixels of it (in either direction), or less than `min_inside_fraction` of its area, remain inside."""
+        bx1, by1, bx2, by2 = (float(v) for v in box)
+        x1, x2 = max(bx1, self.x0) - self.x0, min(bx2, self.x1) - self.x0
+        y1, y2 = max(by1, self.y0) - self.y0, min(by2, self.y1) - self.y0
         if x2 - x1 < max(min_side, 1e-9) or y2 - y1 < max(min_side, 1e-9):
+            return None
+        if (x2 - x1) * (y2 - y1) < min_inside_fraction * (bx2 - bx1) * (by2 - by1):
             return None
         return x1, y1, x2, y2
 
