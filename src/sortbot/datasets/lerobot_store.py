@@ -33,6 +33,7 @@ import av
 
 from sortbot.config import DatasetConfig
 from sortbot.datasets.features import DEPTH_KEY, RGB_KEY, dataset_features
+from sortbot.datasets.thread_scheduling import scheduling_kept
 
 COLLECTION_FILE = "meta/sortbot.json"
 EPISODES_FILE = "meta/sortbot_episodes.jsonl"
@@ -211,7 +212,7 @@ class EpisodeStore:
     def _write_staged(self, folder: Path, frames: list[dict], task: str) -> None:
         shutil.rmtree(folder, ignore_errors=True)  # a half-written try at this episode
         folder.parent.mkdir(parents=True, exist_ok=True)
-        with _lerobot_chatter_held(), _private_hf_cache():
+        with _lerobot_chatter_held(), _private_hf_cache(), scheduling_kept():  # SVT-AV1 goes real-time as root
             dataset = self._new_dataset(folder)
             for frame in frames:
                 dataset.add_frame({**frame, "task": task})
