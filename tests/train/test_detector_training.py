@@ -171,6 +171,7 @@ def test_training_on_the_pick_area_crop_carries_it_to_the_detector_and_eval(yolo
     val_rows = [line.split() for p in (tmp_path / "cropped" / "labels" / "val").iterdir() for line in p.read_text().splitlines()]
 
     result = train_detector(cropped, tmp_path / "det", DetectorTrainConfig(**TINY))
+    assert result.rect  # all crops share one size: rectangular batches, still shuffled
     assert result.crop == crop and json.loads((tmp_path / "det" / "best.crop.json").read_text())["crop"] == crop.as_list()
     assert json.loads((tmp_path / "det" / "metrics.json").read_text())["crop"] == crop.as_list()
     detector = YoloDetector(result.weights, DetectorConfig(confidence=0.0, max_detections=20, device="cpu"))
@@ -185,3 +186,22 @@ def test_training_on_the_pick_area_crop_carries_it_to_the_detector_and_eval(yolo
     with pytest.raises(ValueError, match="same crop"):  # crop weights on whole frames measure nothing useful
         evaluate_detector(result.weights, data_yaml, split="val", device="cpu")
     assert no_network == []
+
+
+def test_rectangular_batches_only_when_every_training_image_has_one_size(yolo_set, tmp_path):
+    from sortbot.perception.yolo_data import split_image_sizes
+    from sortbot.train.detector import use_rect
+
+    data_yaml, _, _ = yolo_set
+    assert split_image_sizes(data_yaml) == {(640, 480)} and use_rect(None, data_yaml)
+    mixed = tmp_path / "mixed"
+    for sub in ("images/train", "labels/train", "images/val", "labels/val"):
+        (mixed / sub).mkdir(parents=True)
+    for i, size in enumerate(((640, 480), (320, 320))):
+        Image.new("RGB", size).save(mixed / "images" / "train" / f"{i}.png")
+        (mixed / "labels" / "train" / f"{i}.txt").write_text("0 0.5 0.5 0.2 0.2\n")
+    (mixed / "data.yaml").write_text(yaml.safe_dump(
+        {"train": "images/train", "val": "images/val", "names": dict(enumerate(CLASS_NAMES))}))
+    assert split_image_sizes(mixed / "data.yaml") == {(640, 480), (320, 320)}
+    assert not use_rect(None, mixed / "data.yaml")  # ultralytics would stop shuffling: square batches
+    assert use_rect(True, mixed / "data.yaml") and not use_rect(False, data_yaml)  # as asked when asked

@@ -22,6 +22,7 @@ from sortbot.config import WorkspaceConfig
 from sortbot.types import CLASS_NAMES, CameraIntrinsics, CameraPose
 
 SPLITS = ("train", "val", "test")
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".webp")
 
 
 def _names(raw) -> dict[int, str]:
@@ -73,6 +74,29 @@ def write_resolved(data_yaml: str | Path, out_dir: str | Path, splits: tuple[str
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(yaml.safe_dump(data, sort_keys=False))
     return out
+
+
+def split_image_sizes(data_yaml: str | Path, split: str = "train") -> set[tuple[int, int]]:
+    """The distinct (width, height) of a split's images (headers only, nothing decoded). A split
+    may be a folder, a list of folders, or a txt file listing images, as ultralytics allows."""
+    from PIL import Image
+
+    entries = read_data_yaml(data_yaml, splits=(split,))[split]
+    files: list[Path] = []
+    for entry in entries if isinstance(entries, list) else [entries]:
+        p = Path(entry)
+        if p.is_dir():
+            files += [f for f in p.rglob("*") if f.suffix.lower() in IMAGE_SUFFIXES]
+        elif p.suffix == ".txt":
+            files += [(p.parent / line.strip()) if not Path(line.strip()).is_absolute() else Path(line.strip())
+                      for line in p.read_text().splitlines() if line.strip()]
+        else:
+            files.append(p)
+    sizes = set()
+    for f in files:
+        with Image.open(f) as im:
+            sizes.add(im.size)
+    return sizes
 
 
 def summarize_metrics(metrics) -> dict:

@@ -18,8 +18,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from sortbot.perception.detector import require_weights
-from sortbot.perception.yolo_data import (CROP_KEY, CropBox, crop_sidecar, read_crop, summarize_metrics,
-                                         write_crop_sidecar, write_resolved)
+from sortbot.perception.yolo_data import (CROP_KEY, CropBox, crop_sidecar, read_crop, split_image_sizes,
+                                         summarize_metrics, write_crop_sidecar, write_resolved)
 from sortbot.perception.yolo_offline import import_yolo, torch_threads_kept, ultralytics_device
 
 RUN_NAME = "yolo"
@@ -53,7 +53,10 @@ class DetectorTrainConfig:
     translate: float = 0.1
     fliplr: float = 0.5  # cutlery classes do not change under flips
     flipud: float = 0.5
-    rect: bool = False  # rectangular batches save padding but ultralytics then stops shuffling
+    # Rectangular batches: the pick-area crop (442 x 287) trains as 416 x 288 instead of a padded
+    # 416 x 416 square, 1.4x faster a step, same augmentation. ultralytics keeps shuffling only when
+    # every batch has the same shape, so None (auto) uses them only when all training images share one size.
+    rect: bool | None = None
     cache: bool = False  # decoded images in RAM: faster, but ultralytics warns it is not deterministic
     val_every_epoch: bool = True  # needed for best.pt and early stopping; the last epoch is always validated
     plots: bool = True  # ultralytics' label/result/PR plots in the run folder
@@ -73,6 +76,7 @@ class DetectorTrainResult:
     device: str
     out_dir: Path
     crop: CropBox | None = None  # the part of the full frames the detector sees (None: all of it)
+    rect: bool = False  # trained on rectangular batches
 
 
 def _prepare_out_dir(out_dir: Path, overwrite: bool) -> None:
@@ -117,6 +121,12 @@ def _use_cpu_threads(model, threads: int | None) -> None:
     model.add_callback("on_pretrain_routine_start", set_threads)
 
 
+def use_rect(setting: bool | None, data_yaml: str | Path) -> bool:
+    """Whether to train on rectangular batches: as set, or (None) when every training image has the
+    same size, the only case where ultralytics still shuffles them."""
+    return setting if setting is not None else len(split_image_sizes(data_yaml, "train")) == 1
+
+
 def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorTrainConfig | None = None,
                    *, overwrite: bool = False) -> DetectorTrainResult:
     """Train on `data_yaml`'s train split, keep the best epoch on its val split, write metrics.json."""
@@ -126,6 +136,7 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     data = write_resolved(data_yaml, out_dir)
     crop = read_crop(data)
     device = ultralytics_device(cfg.device)
+    rect = use_rect(cfg.rect, data)
     model = _load_model(cfg)
     _use_cpu_threads(model, cfg.cpu_threads)
     t0 = time.perf_counter()
@@ -135,7 +146,7 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
             seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
             lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic,
             close_mosaic=cfg.close_mosaic, scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr,
-            flipud=cfg.flipud, rect=cfg.rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
+            flipud=cfg.flipud, rect=rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
             amp=False,  # AMP's self-check downloads weights
             project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
     seconds = time.perf_counter() - t0
@@ -148,9 +159,10 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     epochs_run = int(trainer.epoch) + 1
     record = {
         **summary, "weights": str(weights), "train_seconds": seconds, "epochs": cfg.epochs,
-        "epochs_run": epochs_run, "imgsz": cfg.imgsz, "device": device, "data": str(data), "config": asdict(cfg),
+        "epochs_run": epochs_run, "imgsz": cfg.imgsz, "rect": rect, "device": device, "data": str(data), "config": asdict(cfg),
         **(crop.record() if crop else {CROP_KEY: None}),
     }
     (out_dir / "metrics.json").write_text(json.dumps(record, indent=1))
     return DetectorTrainResult(weights=weights, metrics=summary, train_seconds=seconds, epochs=cfg.epochs,
-                               epochs_run=epochs_run, imgsz=cfg.imgsz, device=device, out_dir=out_dir, crop=crop)
+                               epochs_run=epochs_run, imgsz=cfg.imgsz, device=device, out_dir=out_dir, crop=crop,
+                               rect=rect)
