@@ -35,6 +35,37 @@ def test_merge_concatenates_episodes(collected, tmp_path, capsys):
     assert main(["datasets", "merge", str(out), str(out), "--out", str(merged)]) == 2  # not over an existing one
 
 
+def test_merge_keeps_what_sources_agree_on_so_a_mix_of_step_budgets_still_exports_cropped(collected, tmp_path, capsys):
+    """A long-episode collection merged with a short-episode one differs only in the step budget:
+    the merged record keeps their common workspace, so the pick-area crop is still known."""
+    from sortbot.collect.runner import collect
+    from sortbot.datasets.merge import MIXED, agreed
+    from sortbot.perception.yolo_data import read_crop
+    from conftest import small_env_config, small_request
+
+    assert agreed([{"a": 1, "b": {"c": 2, "d": 3}}, {"a": 1, "b": {"c": 2, "d": 4}}]) == {"a": 1, "b": {"c": 2, "d": MIXED}}
+    assert agreed([[1, 2], [1, 3]]) == MIXED and agreed([5, 5]) == 5
+    out, _ = collected
+    cfg = small_env_config()
+    cfg.outcome.max_steps = 1
+    short = tmp_path / "short"
+    collect(small_request(short, episodes=1, seed=11, env_config=cfg))
+    merged = tmp_path / "merged"
+    assert main(["datasets", "merge", str(out), str(short), "--out", str(merged)]) == 0
+    record = json.loads((merged / "lerobot" / "meta" / "sortbot.json").read_text())
+    assert record["env_config"]["outcome"]["max_steps"] == MIXED
+    assert record["env_config"]["workspace"] == json.loads((out / "lerobot" / "meta" / "sortbot.json").read_text())["env_config"]["workspace"]
+    assert main(["datasets", "export-yolo", str(merged), "--out", str(tmp_path / "y"), "--val-fraction", "0.5"]) == 0
+    assert main(["datasets", "export-yolo", str(out), "--out", str(tmp_path / "y1"), "--val-fraction", "0.5"]) == 0
+    assert read_crop(tmp_path / "y" / "data.yaml") == read_crop(tmp_path / "y1" / "data.yaml")
+
+    record["env_config"]["workspace"]["pick_min"] = MIXED  # sources with different pick areas: no one crop
+    (merged / "lerobot" / "meta" / "sortbot.json").write_text(json.dumps(record))
+    capsys.readouterr()
+    assert main(["datasets", "export-yolo", str(merged), "--out", str(tmp_path / "y2")]) == 2
+    assert "different pick areas" in capsys.readouterr().err
+
+
 def test_push_dry_run_and_offline_error(collected, capsys, monkeypatch):
     out, _ = collected
     assert main(["datasets", "push", str(out), "--repo-id", "me/sortbot-test", "--dry-run"]) == 0

@@ -11,6 +11,19 @@ from sortbot.datasets.lerobot_store import COLLECTION_FILE, EPISODES_FILE, read_
 from sortbot.datasets.summary import resolve_root
 
 SHARED_KEYS = ("policy", "object_set", "objects", "env_config", "dataset_config")
+MIXED = "mixed"  # a setting the merged sources disagree on
+
+
+def agreed(values: list):
+    """What a list of settings agree on: the value when all are equal; for mappings, key by key
+    (so sources collected with different step budgets still share their workspace and camera);
+    otherwise MIXED."""
+    first = values[0]
+    if all(v == first for v in values):
+        return first
+    if all(isinstance(v, dict) for v in values) and all(v.keys() == first.keys() for v in values):
+        return {k: agreed([v[k] for v in values]) for k in first}
+    return MIXED
 
 
 def merge_datasets(sources: list[Path], out: Path, overwrite: bool = False, repo_id: str | None = None) -> Path:
@@ -35,8 +48,7 @@ def merge_datasets(sources: list[Path], out: Path, overwrite: bool = False, repo
         aggr_repo_id=repo_id or collections[0]["repo_id"], roots=roots, aggr_root=target,
         concatenate_videos=False,  # lerobot's remux of clips into one file fails on some (non-monotonic dts)
     )
-    merged = {k: collections[0].get(k) if all(c.get(k) == collections[0].get(k) for c in collections) else "mixed"
-              for k in SHARED_KEYS}
+    merged = {k: agreed([c.get(k) for c in collections]) for k in SHARED_KEYS}
     merged.update(repo_id=repo_id or collections[0]["repo_id"], seed=[c.get("seed") for c in collections],
                   versions=collections[0].get("versions"), merged_from=[str(r) for r in roots])
     (target / COLLECTION_FILE).write_text(json.dumps(merged, indent=1, default=str))

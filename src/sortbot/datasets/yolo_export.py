@@ -18,6 +18,7 @@ import numpy as np
 
 from sortbot.datasets.features import LABELS_KEY, RGB_KEY, camera_from_info, label_rows
 from sortbot.datasets.lerobot_store import read_collection
+from sortbot.datasets.merge import MIXED
 from sortbot.datasets.summary import resolve_root
 from sortbot.perception.yolo_data import CropBox, CropConfig, pick_area_crop, read_data_yaml
 from sortbot.types import CLASS_NAMES
@@ -85,7 +86,11 @@ def dataset_crop(ds, collection: dict, config: CropConfig) -> CropBox:
         intrinsics, pose = camera_from_info(ds.meta.features[RGB_KEY].get("info") or {})
     except KeyError as err:
         raise ValueError(f"the dataset records no camera {err}: export whole frames (--no-crop)") from None
-    ws = ((collection.get("env_config") or {}).get("workspace")) or {}
+    env = collection.get("env_config") or {}
+    ws = (env.get("workspace") if isinstance(env, dict) else None) or {}
+    if not isinstance(ws, dict) or any(ws.get(k) == MIXED for k in ("pick_min", "pick_max", "table_height")):
+        raise ValueError("the dataset merges collections with different pick areas, so no one crop fits all of it: "
+                         "export each collection on its own, or export whole frames (--no-crop)")
     workspace = WorkspaceConfig(**{k: tuple(ws[k]) if isinstance(ws.get(k), list) else ws[k]
                                    for k in ("pick_min", "pick_max", "table_height") if k in ws})
     return pick_area_crop(intrinsics, pose, workspace, config)
