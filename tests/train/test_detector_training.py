@@ -205,3 +205,25 @@ def test_rectangular_batches_only_when_every_training_image_has_one_size(yolo_se
     assert split_image_sizes(mixed / "data.yaml") == {(640, 480), (320, 320)}
     assert not use_rect(None, mixed / "data.yaml")  # ultralytics would stop shuffling: square batches
     assert use_rect(True, mixed / "data.yaml") and not use_rect(False, data_yaml)  # as asked when asked
+
+
+def test_bench_detector_times_square_and_rectangular_epochs_and_prediction(yolo_set, tmp_path, capsys, no_network):
+    from sortbot.cli import main
+
+    data_yaml, _, _ = yolo_set
+    weights = train_detector(data_yaml, tmp_path / "det", DetectorTrainConfig(**TINY)).weights
+    capsys.readouterr()  # the training's own log
+    argv = ["bench", "detector", "--data", str(data_yaml), "--frames", "4", "--imgsz", "64", "--rounds", "1",
+            "--device", "cpu", "--weights", str(weights), "--json"]
+    assert main(argv) == 0
+    result = json.loads(capsys.readouterr().out)  # stdout is the JSON alone
+    for mode in ("square", "rect"):
+        (seconds,) = result[f"train_{mode}"]["epoch_s"]
+        assert seconds > 0 and result[f"train_{mode}"]["images_per_s"] == pytest.approx(4 / seconds)
+    assert result["rect_speedup"] == pytest.approx(result["train_rect"]["images_per_s"] / result["train_square"]["images_per_s"])
+    assert result["device"] == "cpu" and result["predict"]["frames"] == len(VAL_SEEDS)
+    assert 0 < result["predict"]["ms_per_frame_median"] <= result["predict"]["ms_per_frame_p90"]
+    assert main(["bench", "detector", "--data", str(data_yaml), "--frames", "0"]) == 2
+    assert main(["bench", "detector", "--data", str(data_yaml), "--frames", "2", "--batch", "4"]) == 2
+    assert "at least the batch size" in capsys.readouterr().err
+    assert no_network == []

@@ -44,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=sim_cmds.cmd_bench_sim)
     data.add_bench_parser(bench)
+    models.add_bench_parser(bench)
 
     data.add_parsers(sub, scene_args)
     models.add_parsers(sub)
@@ -58,8 +59,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    for name in ("objects", "episodes", "workers", "actions"):
-        if getattr(args, name, 1) is not None and getattr(args, name, 1) < 1:
+    for name in ("objects", "episodes", "workers", "actions", "frames", "rounds"):
+        value = getattr(args, name, None)
+        if isinstance(value, int) and value < 1:  # counts only (replay's --frames is a folder)
             print(f"sortbot: error: --{name} must be at least 1", file=sys.stderr)
             return 2
     try:

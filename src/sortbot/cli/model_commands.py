@@ -102,6 +102,45 @@ def cmd_eval_detector(args) -> int:
     return 0
 
 
+def cmd_bench_detector(args) -> int:
+    import contextlib
+    import tempfile
+
+    from sortbot.train.detector_bench import bench_detector
+
+    with tempfile.TemporaryDirectory(prefix="sortbot-bench-data-") as tmp:
+        data_yaml = _yolo_data(Path(args.data), Path(tmp) / "yolo", 0.2, overwrite=True)
+        say = (lambda mode, s: print(f"  {mode:6s} epoch {s:.1f} s", file=sys.stderr)) if not args.json else None
+        quiet = contextlib.redirect_stdout(sys.stderr) if args.json else contextlib.nullcontext()
+        with quiet, _ultralytics_quiet():
+            result = bench_detector(data_yaml, frames=args.frames, imgsz=args.imgsz, batch=args.batch, device=args.device,
+                                    rounds=args.rounds, weights=args.weights, progress=say)
+    if args.json:
+        print(json.dumps(result, indent=1))
+        return 0
+    sq, rc = result["train_square"]["images_per_s"], result["train_rect"]["images_per_s"]
+    print(f"training, {result['frames']} frames at imgsz {result['imgsz']}, batch {result['batch']}, {result['device']}: "
+          f"square {sq:.2f} img/s, rectangular {rc:.2f} img/s -> {result['rect_speedup']:.2f}x")
+    if "predict" in result:
+        p = result["predict"]
+        print(f"prediction on full frames ({p['device']}): {p['ms_per_frame_median']:.1f} ms/frame median, "
+              f"{p['ms_per_frame_p90']:.1f} ms p90 ({p['frames_per_s']:.1f} frames/s)")
+    return 0
+
+
+def add_bench_parser(bench) -> None:
+    sp = bench.add_parser("detector", help="YOLO training images/s, square vs rectangular batches; prediction ms/frame")
+    sp.add_argument("--data", required=True, help="a YOLO set (data.yaml or its folder) or a collected dataset")
+    sp.add_argument("--frames", type=int, default=120, help="training frames timed per epoch")
+    sp.add_argument("--imgsz", type=int, default=416)
+    sp.add_argument("--batch", type=int, default=4)
+    sp.add_argument("--rounds", type=int, default=2, help="alternating square/rect epochs; the median counts")
+    sp.add_argument("--weights", help="local .pt to time prediction with (optional)")
+    sp.add_argument("--device", default="auto", help="cpu, cuda, cuda:N or auto")
+    sp.add_argument("--json", action="store_true")
+    sp.set_defaults(func=cmd_bench_detector)
+
+
 def add_parsers(sub) -> None:
     train = sub.add_parser("train", help="train models from collected datasets").add_subparsers(dest="train_command", required=True)
     sp = train.add_parser("detector", help="YOLO detector from a collected dataset or a YOLO set, offline")

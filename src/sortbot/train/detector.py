@@ -128,8 +128,9 @@ def use_rect(setting: bool | None, data_yaml: str | Path) -> bool:
 
 
 def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorTrainConfig | None = None,
-                   *, overwrite: bool = False) -> DetectorTrainResult:
-    """Train on `data_yaml`'s train split, keep the best epoch on its val split, write metrics.json."""
+                   *, overwrite: bool = False, callbacks: dict | None = None) -> DetectorTrainResult:
+    """Train on `data_yaml`'s train split, keep the best epoch on its val split, write metrics.json.
+    `callbacks`: ultralytics event name -> function(trainer), e.g. to time epochs or report progress."""
     cfg = config or DetectorTrainConfig()
     out_dir = Path(out_dir).expanduser().resolve()
     _prepare_out_dir(out_dir, overwrite)
@@ -139,6 +140,8 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     rect = use_rect(cfg.rect, data)
     model = _load_model(cfg)
     _use_cpu_threads(model, cfg.cpu_threads)
+    for event, fn in (callbacks or {}).items():
+        model.add_callback(event, fn)
     t0 = time.perf_counter()
     with torch_threads_kept():  # the trainer's count is for training only, not the rest of the process
         metrics = model.train(
