@@ -26,6 +26,12 @@ def test_train_then_eval_detector_from_a_collected_dataset(collected, tmp_path, 
     result = json.loads(capsys.readouterr().out)
     assert 0.0 <= result["map50"] <= 1.0 and "per_class" in result
     assert result["crop"] == crop  # ...and evaluated on the same crop
+    assert main(["eval", "detector", "--weights", str(weights), "--data", str(out), "--device", "cpu", "--json",
+                 "--errors", "--conf", "0.0"]) == 0
+    errors = json.loads(capsys.readouterr().out)["errors"]
+    labelled = sum(int(n) * row["frames"] for n, row in errors["by_objects_in_frame"].items())
+    assert errors["objects"] == labelled == sum(errors[k] for k in ("correct", "wrong_class", "poor_box", "missed"))
+    assert errors["frames"] == sum(row["frames"] for row in errors["by_objects_in_frame"].values()) > 0
     # refuses to train over a previous run, and rejects a folder that holds no data
     assert main(["train", "detector", "--data", str(out), "--out", str(model), "--epochs", "1"]) == 2
     assert main(["train", "detector", "--data", str(tmp_path / "empty_dir_missing"), "--out", str(tmp_path / "x")]) == 2

@@ -90,6 +90,12 @@ def cmd_eval_detector(args) -> int:
                 result = evaluate_detector(args.weights, data_yaml, split=args.split, imgsz=args.imgsz, device=args.device)
         else:
             result = evaluate_detector(args.weights, data_yaml, split=args.split, imgsz=args.imgsz, device=args.device)
+        if args.errors:
+            from sortbot.eval.detector_errors import ErrorConfig, detector_errors
+
+            with _ultralytics_quiet():
+                result["errors"] = detector_errors(args.weights, data_yaml, split=args.split, device=args.device,
+                                                   config=ErrorConfig(confidence=args.conf))
     if args.json:
         print(json.dumps(result, indent=1, default=str))
         return 0
@@ -99,6 +105,16 @@ def cmd_eval_detector(args) -> int:
     for name, row in result.get("per_class", {}).items():
         print(f"  {name:6s} precision {row['precision']:.3f}  recall {row['recall']:.3f}  mAP50 {row['map50']:.3f}  "
               f"mAP50-95 {row['map50_95']:.3f}")
+    if "errors" in result:
+        e = result["errors"]
+        print(f"at confidence {e['confidence']}: {e['objects']} objects in {e['frames']} frames: {e['correct']} found "
+              f"({e['correct_fraction']:.1%}), {e['wrong_class']} wrong class, {e['poor_box']} poor box, "
+              f"{e['missed']} missed; {e['false_positive']} false positives, {e['duplicate']} duplicates")
+        if e["confusions"]:
+            print("  confusions (true->detected): " + ", ".join(f"{k} {v}" for k, v in e["confusions"].items()))
+        for n, row in e["by_objects_in_frame"].items():
+            print(f"  {n} objects in frame: {row['frames']} frames, {row['correct_fraction']:.1%} found, "
+                  f"{row['wrong_class']} wrong class, {row['poor_box']} poor box, {row['missed']} missed")
     return 0
 
 
@@ -166,5 +182,8 @@ def add_parsers(sub) -> None:
     sp.add_argument("--val-fraction", type=float, help="with a collected dataset: hold out only its last episodes")
     sp.add_argument("--imgsz", type=int)
     sp.add_argument("--device", default="auto")
+    sp.add_argument("--errors", action="store_true",
+                    help="also count objects found / wrong class / poor box / missed at --conf, by objects per frame")
+    sp.add_argument("--conf", type=float, default=0.25, help="confidence for --errors (the detector's own threshold)")
     sp.add_argument("--json", action="store_true")
     sp.set_defaults(func=cmd_eval_detector)
