@@ -79,8 +79,14 @@ def test_pick_area_crop_follows_the_camera_and_round_trips_boxes():
     assert box.box_to_crop((60, 40, 110, 260), min_inside_fraction=0.25) is None  # 10 of 50 px wide inside: 1/5
     assert box.box_to_crop((400, 300, 420, 320)) is None  # wholly outside
     assert CropBox.from_record(box.record()) == box and CropBox.from_record({"crop": None}) is None
+    frame = np.random.default_rng(0).integers(0, 255, (480, 640, 3), dtype=np.uint8)
+    pasted = box.paste(box.apply(frame))  # the crop back where it was cut, black around it
+    assert pasted.shape == frame.shape and np.array_equal(box.apply(pasted), box.apply(frame))
+    assert pasted.sum() == box.apply(frame).sum()
     with pytest.raises(ValueError, match="made for 640 x 480"):
         box.apply(np.zeros((240, 320, 3), np.uint8))
+    with pytest.raises(ValueError, match="200 x 200 crop"):
+        box.paste(np.zeros((10, 10, 3), np.uint8))
     with pytest.raises(ValueError, match="inside"):
         CropBox(0, 0, 700, 10, 640, 480)
 

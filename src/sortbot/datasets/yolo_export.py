@@ -20,7 +20,7 @@ from sortbot.datasets.features import LABELS_KEY, RGB_KEY, camera_from_info, lab
 from sortbot.datasets.lerobot_store import read_collection
 from sortbot.datasets.merge import MIXED
 from sortbot.datasets.summary import resolve_root
-from sortbot.perception.yolo_data import CropBox, CropConfig, pick_area_crop, read_data_yaml
+from sortbot.perception.yolo_data import CropBox, CropConfig, label_path, pick_area_crop, read_data_yaml
 from sortbot.types import CLASS_NAMES
 
 
@@ -170,7 +170,7 @@ def crop_yolo_set(data_yaml: str | Path, out: Path, crop: CropBox, min_box_side:
             image = np.asarray(Image.open(image_path).convert("RGB"))
             h, w = image.shape[:2]
             Image.fromarray(np.ascontiguousarray(crop.apply(image))).save(out / "images" / split / image_path.name)
-            label_file = src.parent.parent / "labels" / src.name / (image_path.stem + ".txt")
+            label_file = label_path(image_path)
             boxes = []
             for line in (label_file.read_text().splitlines() if label_file.is_file() else []):
                 if line.strip():

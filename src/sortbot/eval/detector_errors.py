@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from sortbot.perception.detection import Detection
-from sortbot.perception.yolo_data import IMAGE_SUFFIXES, CropBox, read_crop, read_data_yaml
+from sortbot.perception.yolo_data import CropBox, label_path, read_crop, split_images
 from sortbot.types import CLASS_NAMES
 
 
@@ -86,9 +86,7 @@ def detector_errors(weights: str | Path, data_yaml: str | Path, split: str = "va
     cfg = config or ErrorConfig()
     detector = YoloDetector(weights, DetectorConfig(confidence=cfg.confidence, device=device))
     crop = read_crop(data_yaml)
-    data = read_data_yaml(data_yaml, splits=(split,))
-    folders = data[split] if isinstance(data[split], list) else [data[split]]
-    images = sorted(p for f in folders for p in Path(f).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    images = split_images(data_yaml, split)
     if not images:
         raise ValueError(f"{data_yaml} has no images in its {split} split")
     totals: Counter = Counter()
@@ -97,12 +95,8 @@ def detector_errors(weights: str | Path, data_yaml: str | Path, split: str = "va
     for n, path in enumerate(images):
         rgb = np.asarray(Image.open(path).convert("RGB"))
         h, w = rgb.shape[:2]
-        if crop is not None:
-            frame = np.zeros((crop.image_height, crop.image_width, 3), np.uint8)
-            frame[crop.y0:crop.y1, crop.x0:crop.x1] = rgb
-            rgb = frame
-        truth = label_boxes(path.parent.parent.parent / "labels" / path.parent.name / (path.stem + ".txt"), w, h, crop)
-        result = match_frame(truth, detector.predict_rgb(rgb), cfg)
+        truth = label_boxes(label_path(path), w, h, crop)
+        result = match_frame(truth, detector.predict_rgb(crop.paste(rgb) if crop is not None else rgb), cfg)
         confusions.update(result["wrong_class"])
         row = {**result, "wrong_class": len(result["wrong_class"]), "objects": len(truth), "frames": 1}
         totals.update(row)

@@ -76,11 +76,9 @@ def write_resolved(data_yaml: str | Path, out_dir: str | Path, splits: tuple[str
     return out
 
 
-def split_image_sizes(data_yaml: str | Path, split: str = "train") -> set[tuple[int, int]]:
-    """The distinct (width, height) of a split's images (headers only, nothing decoded). A split
-    may be a folder, a list of folders, or a txt file listing images, as ultralytics allows."""
-    from PIL import Image
-
+def split_images(data_yaml: str | Path, split: str = "train") -> list[Path]:
+    """A split's image files, sorted. A split may be a folder, a list of folders, or a txt file
+    listing images, as ultralytics allows."""
     entries = read_data_yaml(data_yaml, splits=(split,))[split]
     files: list[Path] = []
     for entry in entries if isinstance(entries, list) else [entries]:
@@ -88,12 +86,23 @@ def split_image_sizes(data_yaml: str | Path, split: str = "train") -> set[tuple[
         if p.is_dir():
             files += [f for f in p.rglob("*") if f.suffix.lower() in IMAGE_SUFFIXES]
         elif p.suffix == ".txt":
-            files += [(p.parent / line.strip()) if not Path(line.strip()).is_absolute() else Path(line.strip())
-                      for line in p.read_text().splitlines() if line.strip()]
+            files += [p.parent / line.strip() for line in p.read_text().splitlines() if line.strip()]
         else:
             files.append(p)
+    return sorted(files)
+
+
+def label_path(image: Path) -> Path:
+    """The YOLO label file of an image: .../images/<split>/x.jpg -> .../labels/<split>/x.txt."""
+    return image.parent.parent.parent / "labels" / image.parent.name / (image.stem + ".txt")
+
+
+def split_image_sizes(data_yaml: str | Path, split: str = "train") -> set[tuple[int, int]]:
+    """The distinct (width, height) of a split's images (headers only, nothing decoded)."""
+    from PIL import Image
+
     sizes = set()
-    for f in files:
+    for f in split_images(data_yaml, split):
         with Image.open(f) as im:
             sizes.add(im.size)
     return sizes
@@ -205,6 +214,14 @@ class CropBox:
         if (x2 - x1) * (y2 - y1) < min_inside_fraction * (bx2 - bx1) * (by2 - by1):
             return None
         return x1, y1, x2, y2
+
+    def paste(self, image: np.ndarray) -> np.ndarray:
+        """A full frame (black outside the crop) holding a cropped (H, W, 3) image where it was cut."""
+        if image.shape[:2] != (self.height, self.width):
+            raise ValueError(f"expected a {self.width} x {self.height} crop, got {image.shape[1]} x {image.shape[0]}")
+        frame = np.zeros((self.image_height, self.image_width, *image.shape[2:]), image.dtype)
+        frame[self.y0:self.y1, self.x0:self.x1] = image
+        return frame
 
     def box_to_full(self, box) -> tuple[float, float, float, float]:
         """A box in crop pixels back in full-image pixels."""

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import yaml
 
-from sortbot.perception.yolo_data import IMAGE_SUFFIXES, read_data_yaml
+from sortbot.perception.yolo_data import label_path, read_data_yaml, split_images
 from sortbot.train.detector import DetectorTrainConfig, train_detector
 
 
@@ -25,15 +25,14 @@ def subset_yolo_set(data_yaml: str | Path, out: Path, frames: int) -> Path:
     """A YOLO set of the first `frames` training images (links, not copies) that validates on the
     same images; its data.yaml keeps the source's crop."""
     data = read_data_yaml(data_yaml)
-    train = data["train"] if isinstance(data["train"], list) else [data["train"]]
-    images = sorted(p for folder in train for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)[:frames]
+    images = split_images(data_yaml, "train")[:frames]
     if not images:
         raise ValueError(f"{data_yaml} has no training images to benchmark on")
     for sub in ("images", "labels"):
         (out / sub / "train").mkdir(parents=True, exist_ok=True)
     for image in images:
         (out / "images" / "train" / image.name).symlink_to(image.resolve())
-        label = image.parent.parent.parent / "labels" / image.parent.name / (image.stem + ".txt")
+        label = label_path(image)
         if label.is_file():
             (out / "labels" / "train" / label.name).symlink_to(label.resolve())
     record = {k: v for k, v in yaml.safe_load(Path(data_yaml).expanduser().read_text()).items()
@@ -101,19 +100,13 @@ def bench_predict(weights: str | Path, data_yaml: str | Path, frames: int = 30, 
 
     detector = YoloDetector(weights, DetectorConfig(device=device))
     crop = read_crop(data_yaml)
-    data = read_data_yaml(data_yaml)
-    folders = data["val"] if isinstance(data["val"], list) else [data["val"]]
-    images = sorted(p for folder in folders for p in Path(folder).iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)[:frames]
+    images = split_images(data_yaml, "val")[:frames]
     if not images:
         raise ValueError(f"{data_yaml} has no validation images to time prediction on")
     full = []
     for path in images:
         rgb = np.asarray(Image.open(path).convert("RGB"))
-        if crop is not None:
-            frame = np.zeros((crop.image_height, crop.image_width, 3), np.uint8)
-            frame[crop.y0:crop.y1, crop.x0:crop.x1] = rgb
-            rgb = frame
-        full.append(rgb)
+        full.append(crop.paste(rgb) if crop is not None else rgb)
     detector.predict_rgb(full[0])  # first call builds the model's fused graph
     ms = []
     for rgb in full:
