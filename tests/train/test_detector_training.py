@@ -2,8 +2,6 @@
 
 import json
 import os
-import socket
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -16,66 +14,14 @@ from sortbot.config import EnvConfig
 from sortbot.eval.detector_eval import evaluate_detector
 from sortbot.perception import Detection
 from sortbot.perception.detector import DetectorConfig, YoloDetector
-from sortbot.perception.yolo_offline import setup_offline
-from sortbot.sim.env import SortingEnv
 from sortbot.train import DetectorTrainConfig, train_detector
-from sortbot.types import CLASS_NAMES, class_index
+from sortbot.types import CLASS_NAMES
 
-TRAIN_SEEDS, VAL_SEEDS = range(0, 6), range(100, 102)
+from conftest import TINY, VAL_SEEDS
+
+
 def _state(weights):
     return {k: v.float() for k, v in torch.load(weights, map_location="cpu", weights_only=False)["model"].state_dict().items()}
-
-
-TINY = dict(epochs=1, imgsz=64, batch=4, device="cpu", workers=0, cache=False, plots=False)
-
-
-@pytest.fixture(scope="module")
-def yolo_set(tmp_path_factory):
-    """A YOLO detection set written straight from SortingEnv observations (3-object drops); held-out
-    seeds for val. `path` is left out so the yaml's own folder must be used."""
-    setup_offline(tmp_path_factory.getbasetemp() / "ultralytics")
-    root = tmp_path_factory.mktemp("yolo_set")
-    cfg = EnvConfig()
-    cfg.scene.num_objects, cfg.scene.settle_time = 3, 0.5
-    val_counts = Counter()
-    with SortingEnv(cfg) as env:
-        for split, seeds in (("train", TRAIN_SEEDS), ("val", VAL_SEEDS)):
-            (root / "images" / split).mkdir(parents=True)
-            (root / "labels" / split).mkdir(parents=True)
-            for seed in seeds:
-                obs = env.reset(seed=seed)
-                h, w = obs.depth.shape
-                Image.fromarray(obs.rgb).save(root / "images" / split / f"{seed}.png")
-                rows = [f"{class_index(l.cls)} {(l.box[0] + l.box[2]) / 2 / w} {(l.box[1] + l.box[3]) / 2 / h} "
-                        f"{(l.box[2] - l.box[0]) / w} {(l.box[3] - l.box[1]) / h}" for l in obs.labels]
-                (root / "labels" / split / f"{seed}.txt").write_text("\n".join(rows) + "\n")
-                if split == "val":
-                    val_counts.update(l.cls for l in obs.labels)
-            last_obs = obs
-    (root / "data.yaml").write_text(yaml.safe_dump(
-        {"train": "images/train", "val": "images/val", "names": dict(enumerate(CLASS_NAMES))}))
-    return root / "data.yaml", val_counts, last_obs
-
-
-@pytest.fixture
-def no_network(monkeypatch):
-    """Any attempt to reach the internet is recorded and refused."""
-    attempts = []
-
-    def refuse_connect(self, address, *args):
-        if self.family in (socket.AF_INET, socket.AF_INET6):
-            attempts.append(address)
-            raise OSError("network disabled in this test")
-        return real_connect(self, address, *args)
-
-    def refuse_lookup(host, *args, **kwargs):
-        attempts.append(host)
-        raise socket.gaierror("network disabled in this test")
-
-    real_connect = socket.socket.connect
-    monkeypatch.setattr(socket.socket, "connect", refuse_connect)
-    monkeypatch.setattr(socket, "getaddrinfo", refuse_lookup)
-    return attempts
 
 
 @pytest.fixture

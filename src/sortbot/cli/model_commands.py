@@ -32,9 +32,18 @@ def _yolo_data(data: Path, out: Path, val_fraction: float, overwrite: bool, crop
 
 
 def cmd_train_detector(args) -> int:
-    from sortbot.train.detector import DetectorTrainConfig, train_detector
+    from sortbot.train.detector import DetectorTrainConfig, resume_detector, train_detector
 
     out = Path(args.out)
+    if args.resume:
+        fixed = [f"--{n.replace('_', '-')}" for n in ("data", "model", "init", "epochs", "imgsz", "batch", "seed")
+                 if getattr(args, n) is not None]
+        if fixed:
+            raise ValueError(f"--resume continues with the run's own data and settings: drop {' '.join(fixed)}")
+        result = resume_detector(out / "model", device=args.device)
+        return _report_training(result)
+    if not args.data:
+        raise ValueError("train detector needs --data (a collected dataset or a YOLO set), or --resume")
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         raise FileExistsError(f"{out} is not empty: choose another --out or pass --overwrite")
     data_yaml = _yolo_data(Path(args.data), out / "yolo_data", args.val_fraction, overwrite=True, crop=not args.no_crop)
@@ -42,11 +51,15 @@ def cmd_train_detector(args) -> int:
     for name in ("model", "epochs", "imgsz", "device", "init", "batch", "seed"):
         if getattr(args, name) is not None:
             setattr(cfg, name, getattr(args, name))
-    result = train_detector(data_yaml, out / "model", cfg, overwrite=True)
+    return _report_training(train_detector(data_yaml, out / "model", cfg, overwrite=True))
+
+
+def _report_training(result) -> int:
     m = result.metrics
     print(f"best weights -> {result.weights}")
     seen = f"the crop {result.crop.as_list()}" if result.crop else "whole frames"
-    print(f"trained {result.epochs_run}/{result.epochs} epochs at imgsz {result.imgsz} on {seen}, {result.device}, in "
+    resumed = f" (resumed after {result.resumed_after})" if result.resumed_after is not None else ""
+    print(f"trained {result.epochs_run}/{result.epochs} epochs{resumed} at imgsz {result.imgsz} on {seen}, {result.device}, in "
           f"{result.train_seconds / 60:.1f} min; held-out mAP50 {m['map50']:.3f}, mAP50-95 {m['map50_95']:.3f}")
     return 0
 
@@ -160,8 +173,10 @@ def add_bench_parser(bench) -> None:
 def add_parsers(sub) -> None:
     train = sub.add_parser("train", help="train models from collected datasets").add_subparsers(dest="train_command", required=True)
     sp = train.add_parser("detector", help="YOLO detector from a collected dataset or a YOLO set, offline")
-    sp.add_argument("--data", required=True, help="collect --out folder, LeRobot root, or YOLO set (data.yaml)")
+    sp.add_argument("--data", help="collect --out folder, LeRobot root, or YOLO set (data.yaml)")
     sp.add_argument("--out", required=True)
+    sp.add_argument("--resume", action="store_true",
+                    help="continue the interrupted training in --out from its last epoch (same data and settings)")
     sp.add_argument("--model", help="architecture yaml (from scratch, default yolo11n.yaml) or a local .pt")
     sp.add_argument("--init", help="local checkpoint to start from (never downloaded)")
     sp.add_argument("--epochs", type=int)

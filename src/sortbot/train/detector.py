@@ -77,6 +77,7 @@ class DetectorTrainResult:
     out_dir: Path
     crop: CropBox | None = None  # the part of the full frames the detector sees (None: all of it)
     rect: bool = False  # trained on rectangular batches
+    resumed_after: int | None = None  # epochs already trained when this invocation continued an interrupted run
 
 
 def _prepare_out_dir(out_dir: Path, overwrite: bool) -> None:
@@ -152,7 +153,12 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
             flipud=cfg.flipud, rect=rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
             amp=False,  # AMP's self-check downloads weights
             project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
-    seconds = time.perf_counter() - t0
+    return _finish(model, metrics, time.perf_counter() - t0, cfg, out_dir, data, crop, rect, device)
+
+
+def _finish(model, metrics, seconds: float, cfg: DetectorTrainConfig, out_dir: Path, data: Path,
+            crop: CropBox | None, rect: bool, device: str, resumed_after: int | None = None) -> DetectorTrainResult:
+    """Copy the best epoch's weights (and their crop) out of ultralytics' run, write metrics.json."""
     trainer = model.trainer
     best = trainer.best if Path(trainer.best).exists() else trainer.last
     weights = out_dir / "best.pt"
@@ -165,7 +171,66 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
         "epochs_run": epochs_run, "imgsz": cfg.imgsz, "rect": rect, "device": device, "data": str(data), "config": asdict(cfg),
         **(crop.record() if crop else {CROP_KEY: None}),
     }
+    if resumed_after is not None:
+        record["resumed_after_epochs"] = resumed_after  # train_seconds counts from there
     (out_dir / "metrics.json").write_text(json.dumps(record, indent=1))
     return DetectorTrainResult(weights=weights, metrics=summary, train_seconds=seconds, epochs=cfg.epochs,
                                epochs_run=epochs_run, imgsz=cfg.imgsz, device=device, out_dir=out_dir, crop=crop,
-                               rect=rect)
+                               rect=rect, resumed_after=resumed_after)
+
+
+def last_checkpoint(out_dir: str | Path) -> Path:
+    """The interrupted run's last.pt under `out_dir`, or a one-line error saying why it cannot go on."""
+    out_dir = Path(out_dir).expanduser().resolve()
+    last = out_dir / RUN_NAME / "weights" / "last.pt"
+    if not last.is_file():
+        raise FileNotFoundError(f"no interrupted detector training in {out_dir} (no {last.relative_to(out_dir)}): "
+                                "give the folder a `train detector` run wrote")
+    return last
+
+
+def _run_config(args: dict) -> DetectorTrainConfig:
+    """The settings of a run, rebuilt from the arguments ultralytics saved in its checkpoint."""
+    cfg = DetectorTrainConfig()
+    for name in asdict(cfg):
+        if name in args:
+            setattr(cfg, name, args[name])
+    cfg.val_every_epoch = bool(args.get("val", True))
+    cfg.init = args.get("model") if args.get("pretrained") else None
+    if cfg.init:
+        cfg.model = DetectorTrainConfig.model
+    return cfg
+
+
+def resume_detector(out_dir: str | Path, *, device: str | None = None, cpu_threads: int | None = None,
+                    callbacks: dict | None = None) -> DetectorTrainResult:
+    """Continue an interrupted `train_detector` run in `out_dir` from its last epoch, with the same data,
+    settings, optimizer state and schedule (ultralytics' resume), then write best.pt and metrics.json as
+    a finished run does. `device` may change; nothing else can."""
+    last = last_checkpoint(out_dir)
+    yolo = import_yolo()  # offline settings before the checkpoint's ultralytics classes are unpickled
+    import torch
+
+    out_dir = last.parents[2]
+    ckpt = torch.load(last, map_location="cpu", weights_only=False)
+    args, epoch = dict(ckpt.get("train_args") or {}), int(ckpt.get("epoch", -1))
+    if ckpt.get("optimizer") is None or epoch < 0 or epoch + 1 >= int(args.get("epochs", 0)):
+        raise ValueError(f"the training in {out_dir} already finished ({args.get('epochs', '?')} epochs): "
+                         "nothing to resume; start a new one with more --epochs or --init its best.pt")
+    data = Path(args.get("data", ""))
+    if not data.is_file():
+        raise FileNotFoundError(f"the run in {out_dir} trained on {data}, which is gone: it cannot be resumed")
+    cfg = _run_config(args)
+    if device:
+        cfg.device = device
+    cfg.cpu_threads = cpu_threads
+    device = ultralytics_device(cfg.device)
+    model = yolo(str(last), task="detect")
+    _use_cpu_threads(model, cfg.cpu_threads)
+    for event, fn in (callbacks or {}).items():
+        model.add_callback(event, fn)
+    t0 = time.perf_counter()
+    with torch_threads_kept():
+        metrics = model.train(resume=True, device=device)
+    return _finish(model, metrics, time.perf_counter() - t0, cfg, out_dir, data, read_crop(data),
+                   bool(args.get("rect")), device, resumed_after=epoch + 1)
