@@ -140,20 +140,27 @@ def train_detector(data_yaml: str | Path, out_dir: str | Path, config: DetectorT
     device = ultralytics_device(cfg.device)
     rect = use_rect(cfg.rect, data)
     model = _load_model(cfg)
+    metrics, seconds = _run(
+        model, cfg, callbacks,
+        data=str(data), epochs=cfg.epochs, imgsz=cfg.imgsz, batch=cfg.batch, device=device, workers=cfg.workers,
+        seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
+        lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic,
+        close_mosaic=cfg.close_mosaic, scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr,
+        flipud=cfg.flipud, rect=rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
+        amp=False,  # AMP's self-check downloads weights
+        project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
+    return _finish(model, metrics, seconds, cfg, out_dir, data, crop, rect, device)
+
+
+def _run(model, cfg: DetectorTrainConfig, callbacks: dict | None, **train_args) -> tuple:
+    """model.train(**train_args) on the configured CPU threads with the caller's callbacks; (metrics, seconds)."""
     _use_cpu_threads(model, cfg.cpu_threads)
     for event, fn in (callbacks or {}).items():
         model.add_callback(event, fn)
     t0 = time.perf_counter()
     with torch_threads_kept():  # the trainer's count is for training only, not the rest of the process
-        metrics = model.train(
-            data=str(data), epochs=cfg.epochs, imgsz=cfg.imgsz, batch=cfg.batch, device=device, workers=cfg.workers,
-            seed=cfg.seed, deterministic=cfg.deterministic, patience=cfg.patience, optimizer=cfg.optimizer,
-            lr0=cfg.lr0, nbs=cfg.nbs or cfg.batch, warmup_epochs=cfg.warmup_epochs, mosaic=cfg.mosaic,
-            close_mosaic=cfg.close_mosaic, scale=cfg.scale, translate=cfg.translate, fliplr=cfg.fliplr,
-            flipud=cfg.flipud, rect=rect, cache=cfg.cache, val=cfg.val_every_epoch, plots=cfg.plots,
-            amp=False,  # AMP's self-check downloads weights
-            project=str(out_dir), name=RUN_NAME, exist_ok=True, pretrained=bool(cfg.init), verbose=False)
-    return _finish(model, metrics, time.perf_counter() - t0, cfg, out_dir, data, crop, rect, device)
+        metrics = model.train(**train_args)
+    return metrics, time.perf_counter() - t0
 
 
 def _finish(model, metrics, seconds: float, cfg: DetectorTrainConfig, out_dir: Path, data: Path,
@@ -208,29 +215,18 @@ def resume_detector(out_dir: str | Path, *, device: str | None = None, cpu_threa
     settings, optimizer state and schedule (ultralytics' resume), then write best.pt and metrics.json as
     a finished run does. `device` may change; nothing else can."""
     last = last_checkpoint(out_dir)
-    yolo = import_yolo()  # offline settings before the checkpoint's ultralytics classes are unpickled
-    import torch
-
     out_dir = last.parents[2]
-    ckpt = torch.load(last, map_location="cpu", weights_only=False)
-    args, epoch = dict(ckpt.get("train_args") or {}), int(ckpt.get("epoch", -1))
-    if ckpt.get("optimizer") is None or epoch < 0 or epoch + 1 >= int(args.get("epochs", 0)):
+    model = import_yolo()(str(last), task="detect")  # its .ckpt is the checkpoint, read once
+    args, epoch = dict(model.ckpt.get("train_args") or {}), int(model.ckpt.get("epoch", -1))
+    if model.ckpt.get("optimizer") is None or epoch < 0 or epoch + 1 >= int(args.get("epochs", 0)):
         raise ValueError(f"the training in {out_dir} already finished ({args.get('epochs', '?')} epochs): "
                          "nothing to resume; start a new one with more --epochs or --init its best.pt")
     data = Path(args.get("data", ""))
     if not data.is_file():
         raise FileNotFoundError(f"the run in {out_dir} trained on {data}, which is gone: it cannot be resumed")
     cfg = _run_config(args)
-    if device:
-        cfg.device = device
-    cfg.cpu_threads = cpu_threads
+    cfg.device, cfg.cpu_threads = device or cfg.device, cpu_threads
     device = ultralytics_device(cfg.device)
-    model = yolo(str(last), task="detect")
-    _use_cpu_threads(model, cfg.cpu_threads)
-    for event, fn in (callbacks or {}).items():
-        model.add_callback(event, fn)
-    t0 = time.perf_counter()
-    with torch_threads_kept():
-        metrics = model.train(resume=True, device=device)
-    return _finish(model, metrics, time.perf_counter() - t0, cfg, out_dir, data, read_crop(data),
-                   bool(args.get("rect")), device, resumed_after=epoch + 1)
+    metrics, seconds = _run(model, cfg, callbacks, resume=True, device=device)
+    return _finish(model, metrics, seconds, cfg, out_dir, data, read_crop(data), bool(cfg.rect), device,
+                   resumed_after=epoch + 1)
