@@ -128,3 +128,36 @@ def test_export_yolo_crops_to_the_pick_area_and_clips_labels(collected, tmp_path
     whole = [row[2:6] for row in labels if row[0] > 0.5 and crop.x0 <= row[2] and row[4] <= crop.x1
              and crop.y0 <= row[3] and row[5] <= crop.y1]
     assert whole and all(np.allclose(crop.box_to_full(crop.box_to_crop(b)), b) for b in whole)  # the detector's shift back
+
+
+def test_export_leaves_cutlery_lying_in_a_bin_unlabelled():
+    """Sorted cutlery is no target: a fork whose centre lies in the fork bin gets no label, while a
+    spoon in the pick area keeps its own; `--label-sorted` (label_sorted) labels both. The bins are
+    the ones the dataset recorded."""
+    from sortbot.config import WorkspaceConfig
+    from sortbot.datasets.features import LABEL_COLUMNS
+    from sortbot.datasets.yolo_export import BIN_FIELDS, dataset_workspace, yolo_lines
+    from sortbot.types import CLASS_NAMES
+
+    bins = {"fork": [0.0, 0.35, 0.0], "knife": [-0.35, 0.0, 1.5707963], "spoon": [0.0, -0.35, 0.0]}
+    recorded = dataset_workspace({"env_config": {"workspace": {"bins": bins, "bin_inner_size": [0.2, 0.1]}}},
+                                 BIN_FIELDS)
+    assert recorded.bins["fork"] == (0.0, 0.35, 0.0) and recorded.bin_inner_size == (0.2, 0.1)
+    rows = np.zeros((3, len(LABEL_COLUMNS)), np.float32)  # the third row: no object
+    rows[0] = [1, CLASS_NAMES.index("spoon"), 100, 100, 160, 120, 0.30, 0.0, 0.005, 0.0]
+    rows[1] = [1, CLASS_NAMES.index("fork"), 10, 10, 60, 30, 0.02, 0.38, 0.005, 0.0]  # in the recorded fork bin
+    sorted_out = yolo_lines(rows.ravel(), 320, 240, 4, bins=recorded)
+    assert [line.split()[0] for line in sorted_out] == [str(CLASS_NAMES.index("spoon"))]
+    assert len(yolo_lines(rows.ravel(), 320, 240, 4)) == 2
+    # with the default bins (y = 0.29 +- 0.055) that fork lies outside every bin: labelled
+    assert len(yolo_lines(rows.ravel(), 320, 240, 4, bins=WorkspaceConfig())) == 2
+
+
+def test_export_refuses_a_merge_whose_collections_have_different_bins():
+    import pytest
+
+    from sortbot.datasets.merge import MIXED
+    from sortbot.datasets.yolo_export import BIN_FIELDS, dataset_workspace
+
+    with pytest.raises(ValueError, match="different bins"):
+        dataset_workspace({"env_config": {"workspace": {"bins": MIXED}}}, BIN_FIELDS)

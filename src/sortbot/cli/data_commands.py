@@ -109,7 +109,7 @@ def cmd_datasets_export_yolo(args) -> int:
         bar.total = total
         bar.update(done - bar.n)
 
-    config = YoloExportConfig(val_fraction=args.val_fraction)
+    config = YoloExportConfig(val_fraction=args.val_fraction, label_sorted=args.label_sorted)
     if args.no_crop:
         config.crop = None
     data_yaml = export_yolo(Path(args.dir), Path(args.out), config, overwrite=args.overwrite, progress=progress)
@@ -220,6 +220,8 @@ def add_parsers(sub, scene_args) -> None:
     sp.add_argument("--out", required=True)
     sp.add_argument("--val-fraction", type=float, default=0.2)
     sp.add_argument("--no-crop", action="store_true", help="whole frames (default: cut to the pick area, labels clipped)")
+    sp.add_argument("--label-sorted", action="store_true",
+                    help="also label cutlery lying in a bin (default: sorted cutlery is no target, so unlabelled)")
     sp.add_argument("--overwrite", action="store_true")
     sp.set_defaults(func=cmd_datasets_export_yolo)
 
