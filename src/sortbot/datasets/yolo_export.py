@@ -35,8 +35,8 @@ class YoloExportConfig:
     # detector can tell (48 of 65 misses on 30 held-out episodes before this rule).
     min_inside_fraction: float = 0.25
     # cutlery lying in a bin is sorted: no target, so not labelled even where a corner of it shows
-    # in the crop (24 of the 25 objects R416ft2 left wholly unmatched on 30 held-out episodes were
-    # in a bin, most showing a few pixels at the crop's top corners). False: label what the camera sees.
+    # in the crop (19 of the 58 objects R416ft2 missed on 30 held-out episodes: spoons in their bin,
+    # a few pixels of each at the crop's top corner). False: label what the camera sees.
     label_sorted: bool = False
     jpeg_quality: int = 95
     crop: CropConfig | None = field(default_factory=CropConfig)  # None: whole frames
