@@ -90,15 +90,16 @@ PICK_AREA_FIELDS = ("pick_min", "pick_max", "table_height")
 BIN_FIELDS = ("bins", "bin_inner_size", "bin_wall_height")
 
 
-def dataset_workspace(collection: dict, fields: tuple[str, ...]) -> WorkspaceConfig:
+def dataset_workspace(collection: dict, fields: tuple[str, ...], refusal: str | None = None) -> WorkspaceConfig:
     """The workspace recorded in a dataset's collection metadata: `fields` as recorded (defaults
-    where one is missing); a merge of collections that differ in one of them is refused."""
+    where one is missing). A merge of collections that differ in one of them is refused, with
+    `refusal` or else a message naming the fields."""
     env = collection.get("env_config") or {}
     ws = (env.get("workspace") if isinstance(env, dict) else None) or {}
-    if not isinstance(ws, dict) or any(ws.get(k) == MIXED for k in fields):
-        what = "pick areas, so no one crop fits all of it" if fields == PICK_AREA_FIELDS else "bins"
-        raise ValueError(f"the dataset merges collections with different {what}: export each collection on its own"
-                         + (", or export whole frames (--no-crop)" if fields == PICK_AREA_FIELDS else ""))
+    mixed = [k for k in fields if not isinstance(ws, dict) or ws.get(k) == MIXED]
+    if mixed:
+        raise ValueError(refusal or f"the dataset merges collections with different {', '.join(mixed)}: "
+                         "export each collection on its own")
 
     def recorded(value):
         if isinstance(value, dict):
@@ -115,7 +116,10 @@ def dataset_crop(ds, collection: dict, config: CropConfig) -> CropBox:
         intrinsics, pose = camera_from_info(ds.meta.features[RGB_KEY].get("info") or {})
     except KeyError as err:
         raise ValueError(f"the dataset records no camera {err}: export whole frames (--no-crop)") from None
-    return pick_area_crop(intrinsics, pose, dataset_workspace(collection, PICK_AREA_FIELDS), config)
+    workspace = dataset_workspace(collection, PICK_AREA_FIELDS, "the dataset merges collections with different pick "
+                                  "areas, so no one crop fits all of it: export each collection on its own, or export "
+                                  "whole frames (--no-crop)")
+    return pick_area_crop(intrinsics, pose, workspace, config)
 
 
 def export_yolo(path: Path, out: Path, config: YoloExportConfig | None = None, overwrite: bool = False,
